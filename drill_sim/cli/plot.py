@@ -1,0 +1,39 @@
+"""Figures: bit speed against time (like RGD 2007, Figure 2) with weight and torque on bit."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
+                     top_drive_speed: np.ndarray, wob: np.ndarray, tob: np.ndarray,
+                     surface_torque: np.ndarray, stuck: np.ndarray, *, units: dict[str, str],
+                     title: str) -> None:
+    """Write a three-panel PNG; ``units`` labels the axes (time, speed, force, torque)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 7.5), constrained_layout=True)
+    ax = axes[0]
+    ax.plot(time, bit_speed, lw=0.8, label="bit")
+    ax.plot(time, top_drive_speed, "k--", lw=0.8, label="top drive (command)")
+    if np.any(stuck):
+        ax.fill_between(time, 0, 1, where=stuck, color="tab:red", alpha=0.15,
+                        transform=ax.get_xaxis_transform(), label="stuck", step="mid")
+    ax.set_ylabel(f"speed [{units['speed']}]")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.set_title(title)
+    axes[1].plot(time, wob, lw=0.8, color="tab:green")
+    axes[1].set_ylabel(f"WOB [{units['force']}]")
+    axes[2].plot(time, tob, lw=0.8, color="tab:orange", label="on bit")
+    axes[2].plot(time, surface_torque, lw=0.8, color="tab:purple", label="surface (string)")
+    axes[2].set_ylabel(f"torque [{units['torque']}]")
+    axes[2].legend(loc="upper right", fontsize=8)
+    axes[2].set_xlabel(f"time [{units['time']}]")
+    for a in axes:
+        a.grid(alpha=0.3)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

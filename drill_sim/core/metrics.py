@@ -1,0 +1,97 @@
+"""Metrics of MODEL.md section 7 over a window, from the kernel's running integrals.
+
+SSI (stick-slip severity index) = (omega_max - omega_min) / (2 omega_mean) of the bit speed over
+the window: 0 for steady rotation, >= 1 whenever the bit stops. Means are time averages over
+the window, the stick reaction counted in the weight and torque on bit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from . import kernel as kn
+from .parameters import Scales
+
+
+@dataclass(frozen=True)
+class Metrics:
+    """Window metrics, dimensionless (angular speeds [1/t*], forces [F*], torques [C])."""
+
+    duration: float
+    ssi: float
+    stick_fraction: float
+    bounce_fraction: float
+    mean_bit_speed: float
+    min_bit_speed: float
+    max_bit_speed: float
+    mean_wob: float
+    mean_tob: float
+    mean_surface_torque: float
+    mean_rop: float
+    mean_w0: float
+    mean_omega0: float
+    work_top_drive: float          # [C] (torque scale times rad)
+    dissipated_rotation: float     # [C]
+    work_weight: float             # [F* L*]
+    work_hoist: float              # [F* L*]
+    dissipated_axial: float        # [F* L*]
+
+    @classmethod
+    def from_accumulators(cls, acc: np.ndarray) -> Metrics:
+        time = acc[kn.A_TIME]
+        if time <= 0.0:
+            nan = math.nan
+            return cls(0.0, *([nan] * 17))
+        mean_omega = acc[kn.A_OMEGA] / time
+        spread = acc[kn.A_OMEGA_MAX] - acc[kn.A_OMEGA_MIN]
+        return cls(
+            duration=time,
+            ssi=spread / (2.0 * mean_omega) if mean_omega > 0.0 else math.inf,
+            stick_fraction=acc[kn.A_STICK_TIME] / time,
+            bounce_fraction=acc[kn.A_BOUNCE_TIME] / time,
+            mean_bit_speed=mean_omega,
+            min_bit_speed=acc[kn.A_OMEGA_MIN],
+            max_bit_speed=acc[kn.A_OMEGA_MAX],
+            mean_wob=acc[kn.A_W] / time,
+            mean_tob=acc[kn.A_T] / time,
+            mean_surface_torque=acc[kn.A_TS] / time,
+            mean_rop=acc[kn.A_V] / time,
+            mean_w0=acc[kn.A_W0] / time,
+            mean_omega0=acc[kn.A_OMEGA0] / time,
+            work_top_drive=acc[kn.A_WORK_TOP_DRIVE],
+            dissipated_rotation=acc[kn.A_DISSIPATED_ROT],
+            work_weight=acc[kn.A_WORK_WEIGHT],
+            work_hoist=acc[kn.A_WORK_HOIST],
+            dissipated_axial=acc[kn.A_DISSIPATED_AX],
+        )
+
+    def as_dict(self) -> dict[str, float]:
+        return asdict(self)
+
+    def to_si(self, scales: Scales) -> dict[str, float]:
+        """The same metrics in SI, every key carrying its unit."""
+        c, f, length = scales.stiffness_nm_per_rad, scales.force_n, scales.length_m
+        w_rate = 1.0 / scales.time_s
+        return {
+            "duration_s": self.duration * scales.time_s,
+            "ssi": self.ssi,
+            "stick_fraction": self.stick_fraction,
+            "bounce_fraction": self.bounce_fraction,
+            "mean_bit_speed_rad_s": self.mean_bit_speed * w_rate,
+            "min_bit_speed_rad_s": self.min_bit_speed * w_rate,
+            "max_bit_speed_rad_s": self.max_bit_speed * w_rate,
+            "mean_wob_n": self.mean_wob * f,
+            "mean_tob_nm": self.mean_tob * c,
+            "mean_surface_torque_nm": self.mean_surface_torque * c,
+            "mean_rop_m_s": self.mean_rop * scales.velocity_m_s,
+            "mean_available_weight_n": self.mean_w0 * f,
+            "mean_top_drive_speed_rad_s": self.mean_omega0 * w_rate,
+            "work_top_drive_j": self.work_top_drive * c,
+            "dissipated_rotation_j": self.dissipated_rotation * c,
+            "work_weight_j": self.work_weight * f * length,
+            "work_hoist_j": self.work_hoist * f * length,
+            "dissipated_axial_j": self.dissipated_axial * f * length,
+        }

@@ -1,0 +1,120 @@
+"""Named parameter sets shipped with the package, and the same format read from any YAML file.
+
+A preset file has a ``bit`` section (bit and rock, SI), either a ``string`` section (pipe and
+collar geometry, from which C, I, M and W_s are computed) or a ``lumped`` section (those four
+directly), and optional default ``commands`` (``top_drive_speed_rpm``, ``weight_on_bit_kn``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from importlib import resources
+from pathlib import Path
+
+import yaml
+
+from .parameters import ParameterError, RigParameters, StringGeometry, check_number
+
+_BIT_KEYS = ("bit_radius_m", "blade_count", "intrinsic_specific_energy_pa", "cutting_inclination",
+             "contact_stress_pa", "wear_flat_length_m", "friction_coefficient",
+             "wear_flat_orientation")
+_LUMPED_KEYS = ("bha_mass_kg", "bha_inertia_kg_m2", "torsional_stiffness_nm_per_rad",
+                "submerged_weight_n")
+
+
+@dataclass(frozen=True)
+class Preset:
+    """A named rig: its SI parameters and the surface commands it is usually run at."""
+
+    name: str
+    description: str
+    rig: RigParameters
+    string: StringGeometry | None
+    top_drive_speed_rpm: float
+    weight_on_bit_kn: float
+
+    @property
+    def top_drive_speed_rad_s(self) -> float:
+        return self.top_drive_speed_rpm * 2.0 * math.pi / 60.0
+
+    @property
+    def hook_load_n(self) -> float:
+        """Hook load H0 [N] that leaves the default weight on bit: H0 = W_s - WOB."""
+        return self.rig.submerged_weight_n - 1e3 * self.weight_on_bit_kn
+
+
+def preset_names() -> list[str]:
+    """Names of the presets shipped with the package."""
+    folder = resources.files("drill_sim") / "presets"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
+
+
+def load_preset(name_or_path: str | Path) -> Preset:
+    """Load a shipped preset by name (``base``, ``shallow``, ``deep``) or any preset YAML file."""
+    text_name = str(name_or_path)
+    if text_name in preset_names():
+        source = resources.files("drill_sim") / "presets" / f"{text_name}.yaml"
+        text, name = source.read_text(encoding="utf-8"), text_name
+    else:
+        path = Path(text_name)
+        if not path.is_file():
+            raise ParameterError(f"preset {text_name!r} is neither a shipped preset "
+                                 f"({', '.join(preset_names())}) nor a readable YAML file")
+        text, name = path.read_text(encoding="utf-8"), path.stem
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ParameterError(f"preset {text_name!r} is not valid YAML: {exc}") from None
+    return preset_from_dict(name, data)
+
+
+def preset_from_dict(name: str, data: object) -> Preset:
+    """Build a preset from the parsed YAML mapping, refusing missing or unknown keys."""
+    if not isinstance(data, dict):
+        raise ParameterError(f"preset {name!r}: expected a mapping with 'bit' and 'string' or "
+                             f"'lumped' sections, got {type(data).__name__}")
+    bit = _section(name, data, "bit", _BIT_KEYS, required=True)
+    string = None
+    if "string" in data:
+        keys = tuple(f.name for f in fields(StringGeometry))
+        string = StringGeometry(**_section(name, data, "string", keys, required=False,
+                                           need=keys[:6]))
+        lumped = string.lumped()
+    else:
+        lumped = _section(name, data, "lumped", _LUMPED_KEYS, required=True)
+    commands = _section(name, data, "commands", ("top_drive_speed_rpm", "weight_on_bit_kn"),
+                        required=False, need=())
+    unknown = set(data) - {"description", "bit", "string", "lumped", "commands"}
+    if unknown:
+        raise ParameterError(f"preset {name!r}: unknown section(s) {sorted(unknown)}; expected "
+                             "description, bit, string or lumped, commands")
+    return Preset(
+        name=name,
+        description=str(data.get("description", "")),
+        rig=RigParameters(**bit, **lumped),
+        string=string,
+        top_drive_speed_rpm=check_number("top_drive_speed_rpm",
+                                         commands.get("top_drive_speed_rpm", 60.0)),
+        weight_on_bit_kn=check_number("weight_on_bit_kn", commands.get("weight_on_bit_kn", 100.0),
+                                      low_inclusive=True),
+    )
+
+
+def _section(name: str, data: dict, key: str, allowed: tuple[str, ...], *, required: bool,
+             need: tuple[str, ...] | None = None) -> dict:
+    section = data.get(key)
+    if section is None:
+        if required:
+            raise ParameterError(f"preset {name!r}: missing section {key!r}")
+        return {}
+    if not isinstance(section, dict):
+        raise ParameterError(f"preset {name!r}: section {key!r} must be a mapping")
+    unknown = set(section) - set(allowed)
+    if unknown:
+        raise ParameterError(f"preset {name!r}: unknown key(s) {sorted(unknown)} in {key!r}; "
+                             f"expected {', '.join(allowed)}")
+    missing = [k for k in (allowed if need is None else need) if k not in section]
+    if missing:
+        raise ParameterError(f"preset {name!r}: missing key(s) {missing} in {key!r}")
+    return dict(section)

@@ -1,0 +1,152 @@
+"""The SI face of the core: surface commands in SI, rig outputs in SI, time in seconds.
+
+``Rig`` wraps a dimensionless ``Simulator`` and converts at the boundary, so the node, the CLI
+and the recorder never see a dimensionless number.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .parameters import ParameterError, RigParameters, check_number
+from .simulator import DEFAULT_DT, Simulator
+from .stability import SteadyState, steady_state
+
+RPM = 2.0 * math.pi / 60.0   # rad/s per rpm
+
+
+@dataclass(frozen=True)
+class RigSample:
+    """What a rig shows at one instant, SI. Axial quantities are positive downhole."""
+
+    time_s: float
+    bit_speed_rad_s: float
+    rop_m_s: float                 # bit axial velocity (rate of penetration when > 0)
+    wob_n: float                   # weight on bit, stick reaction included
+    tob_nm: float                  # torque on bit
+    surface_torque_nm: float       # string torque C (phi_td - phi), as the top drive measures it
+    depth_of_cut_m: float          # per revolution, d = n d_n (negative off bottom)
+    bit_depth_m: float             # bit position below its start
+    hole_depth_m: float            # deepest point of the hole below the bit's start
+    bit_angle_rad: float
+    top_drive_angle_rad: float
+    top_drive_speed_rad_s: float   # commanded
+    hook_load_n: float             # commanded
+    stuck: bool
+    off_bottom: bool
+    stick_slip: bool               # a stick phase within the stick-slip window
+
+
+class Rig:
+    """A drilling rig in SI: ``command`` it, ``advance_to`` a time, ``sample`` its outputs.
+
+    dt_s: fixed step [s] (default DEFAULT_DT t*); stick_window_s: how long the stick-slip flag
+    stays up after a stick [s] (default two torsional periods, 4 pi t*); hoist_speed_limit_m_s:
+    the string rises no faster (default unlimited).
+    """
+
+    def __init__(self, params: RigParameters, dt_s: float | None = None, *,
+                 stick_window_s: float | None = None,
+                 hoist_speed_limit_m_s: float = math.inf) -> None:
+        self.params = params
+        self.scales = params.scales
+        self.groups = params.groups
+        ts = self.scales.time_s
+        dt = DEFAULT_DT if dt_s is None else check_number("dt_s", dt_s) / ts
+        window = 4.0 * math.pi if stick_window_s is None else \
+            check_number("stick_window_s", stick_window_s) / ts
+        self.sim = Simulator(self.groups, dt, stick_window=window)
+        self.set_hoist_speed_limit(hoist_speed_limit_m_s)
+        self._hook_load_n = params.submerged_weight_n
+        self._speed_rad_s = 0.0
+
+    # ---- conversions --------------------------------------------------------------------
+    @property
+    def dt_s(self) -> float:
+        return self.sim.dt * self.scales.time_s
+
+    def w0_of(self, hook_load_n: float) -> float:
+        return (self.params.submerged_weight_n - hook_load_n) / self.scales.force_n
+
+    def omega0_of(self, speed_rad_s: float) -> float:
+        return speed_rad_s * self.scales.time_s
+
+    def set_hoist_speed_limit(self, limit_m_s: float) -> None:
+        if limit_m_s != math.inf:
+            limit_m_s = check_number("hoist_speed_limit_m_s", limit_m_s)
+        self.sim.set_hoist_speed_limit(limit_m_s / self.scales.velocity_m_s)
+
+    def set_stick_window(self, window_s: float) -> None:
+        self.sim.stick_window = check_number("stick_window_s", window_s) / self.scales.time_s
+
+    # ---- commands and initial states ----------------------------------------------------
+    def command(self, top_drive_speed_rad_s: float, hook_load_n: float) -> None:
+        """Hold these surface commands from now on: top-drive speed >= 0, hook load >= 0."""
+        speed = check_number("top_drive_speed_rad_s", top_drive_speed_rad_s, low_inclusive=True)
+        hook = check_number("hook_load_n", hook_load_n, low_inclusive=True)
+        self.sim.set_commands(self.w0_of(hook), self.omega0_of(speed))
+        self._speed_rad_s, self._hook_load_n = speed, hook
+
+    def start_steady(self, top_drive_speed_rad_s: float, hook_load_n: float,
+                     perturbation: float = 0.0) -> None:
+        """Start exactly on steady drilling at these commands (bit speed times 1 + perturbation)."""
+        self.command(top_drive_speed_rad_s, hook_load_n)
+        self.sim.start_steady(self.w0_of(hook_load_n), self.omega0_of(top_drive_speed_rad_s),
+                              perturbation)
+
+    def start_at_rest(self, gap_m: float = 0.0) -> None:
+        """Bit at rest ``gap_m`` above a flat bottom, string hanging (hook load = W_s), no rotation."""
+        self.sim.start_at_rest(check_number("gap_m", gap_m, low_inclusive=True)
+                               / self.scales.length_m)
+        self.command(0.0, self.params.submerged_weight_n)
+
+    def steady_state(self, top_drive_speed_rad_s: float, hook_load_n: float) -> SteadyState:
+        """The dimensionless steady state at these commands (NoSteadyDrilling if none)."""
+        return steady_state(self.groups, self.w0_of(hook_load_n),
+                            self.omega0_of(top_drive_speed_rad_s))
+
+    # ---- stepping -----------------------------------------------------------------------
+    @property
+    def time_s(self) -> float:
+        return self.sim.steps * self.dt_s
+
+    def advance_to(self, time_s: float) -> int:
+        """Advance to the last step at or before ``time_s``; return the steps taken."""
+        if not math.isfinite(time_s):
+            raise ParameterError(f"time_s = {time_s!r} is not finite")
+        n = int(math.floor(time_s / self.dt_s + 1e-9)) - self.sim.steps
+        if n > 0:
+            self.sim.advance(n)
+        return max(n, 0)
+
+    def advance(self, duration_s: float) -> int:
+        return self.advance_to(self.time_s + check_number("duration_s", duration_s,
+                                                          low_inclusive=True))
+
+    # ---- observation --------------------------------------------------------------------
+    def sample(self) -> RigSample:
+        s = self.sim.state()
+        sc = self.scales
+        return RigSample(
+            time_s=self.time_s,
+            bit_speed_rad_s=s.omega / sc.time_s,
+            rop_m_s=s.v * sc.velocity_m_s,
+            wob_n=s.w * sc.force_n,
+            tob_nm=s.t * sc.stiffness_nm_per_rad,
+            surface_torque_nm=s.ts * sc.stiffness_nm_per_rad,
+            depth_of_cut_m=self.groups.n * s.delta_n * sc.length_m,
+            bit_depth_m=s.u * sc.length_m,
+            hole_depth_m=max(0.0, self.sim.hole_bottom) * sc.length_m,
+            bit_angle_rad=s.phi,
+            top_drive_angle_rad=s.phi_td,
+            top_drive_speed_rad_s=self._speed_rad_s,
+            hook_load_n=self._hook_load_n,
+            stuck=s.stuck,
+            off_bottom=s.off_bottom,
+            stick_slip=self.sim.stick_slip,
+        )
+
+    def metrics(self) -> dict[str, float]:
+        """Metrics of the current window in SI (see drill_sim.core.metrics)."""
+        return self.sim.window_metrics().to_si(self.scales)

@@ -1,0 +1,248 @@
+"""The dimensionless stepper: fixed-size state, commands held between calls, window metrics.
+
+``Simulator`` owns the state arrays of the kernel and is what the ROS node advances every tick.
+``Simulator.run`` is the offline driver, returning a ``Trajectory`` with named columns.
+All quantities here are dimensionless (MODEL.md section 3); ``drill_sim.core.rig`` converts.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import kernel as kn
+from .metrics import Metrics
+from .parameters import Groups, ParameterError, check_number
+from .stability import steady_state
+
+DEFAULT_DT = 5e-4            # [t*]; chosen from the convergence study (tests/test_convergence.py)
+MAX_NODES = 2**22            # surface memory cap: 32 MiB
+
+
+def surface_nodes(groups: Groups, dt: float) -> int:
+    """Nodes per sector: the power of two that makes a node about one step of rotation at omega ~ 1.
+
+    Tying the angular grid to the step keeps the scheme's error one function of dt.
+    """
+    wanted = (2.0 * math.pi / groups.n) / dt
+    return int(min(MAX_NODES, max(64, 2 ** math.ceil(math.log2(wanted)))))
+
+
+@dataclass(frozen=True)
+class StateView:
+    """A copy of the instantaneous state, dimensionless, with MODEL.md's names."""
+
+    tau: float
+    u: float
+    v: float
+    phi: float
+    omega: float
+    phi_td: float
+    w: float          # weight on bit over the last step (stick reaction included)
+    t: float          # torque on bit over the last step
+    ts: float         # string (surface) torque phi_td - phi
+    delta_n: float    # depth of cut per blade
+    g: float          # wear-flat contact factor
+    regime: int       # kernel.REGIME_*
+    since_stick: float
+
+    @property
+    def stuck(self) -> bool:
+        return self.regime == kn.REGIME_STUCK
+
+    @property
+    def off_bottom(self) -> bool:
+        return self.regime == kn.REGIME_OFF_BOTTOM
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Sampled outputs of a run (dimensionless), one array per MODEL.md quantity."""
+
+    tau: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    phi: np.ndarray
+    omega: np.ndarray
+    w: np.ndarray
+    t: np.ndarray
+    ts: np.ndarray
+    delta_n: np.ndarray
+    stuck: np.ndarray
+    off_bottom: np.ndarray
+    w0: np.ndarray
+    omega0: np.ndarray
+    metrics: Metrics
+
+    @classmethod
+    def from_rows(cls, rows: np.ndarray, metrics: Metrics) -> Trajectory:
+        return cls(tau=rows[:, kn.O_TAU].copy(), u=rows[:, kn.O_U].copy(),
+                   v=rows[:, kn.O_V].copy(), phi=rows[:, kn.O_PHI].copy(),
+                   omega=rows[:, kn.O_OMEGA].copy(), w=rows[:, kn.O_W].copy(),
+                   t=rows[:, kn.O_T].copy(), ts=rows[:, kn.O_TS].copy(),
+                   delta_n=rows[:, kn.O_DELTA].copy(),
+                   stuck=rows[:, kn.O_REGIME] == kn.REGIME_STUCK,
+                   off_bottom=rows[:, kn.O_REGIME] == kn.REGIME_OFF_BOTTOM,
+                   w0=rows[:, kn.O_W0].copy(), omega0=rows[:, kn.O_OMEGA0].copy(),
+                   metrics=metrics)
+
+
+class Simulator:
+    """Fixed-step integration of the RGD model in dimensionless form.
+
+    dt: step [t*]. stick_window: how long the stick-slip flag stays up after a stick [t*];
+    default two torsional periods (4 pi). hoist_speed_limit: the string rises no faster [L*/t*].
+    """
+
+    def __init__(self, groups: Groups, dt: float = DEFAULT_DT, *, stick_window: float = 4 * math.pi,
+                 hoist_speed_limit: float = math.inf, nodes: int | None = None) -> None:
+        self.groups = groups
+        self.dt = check_number("dt", dt, high=0.05)
+        self.stick_window = check_number("stick_window", stick_window)
+        nodes = surface_nodes(groups, self.dt) if nodes is None else int(nodes)
+        if nodes < 4 or nodes & (nodes - 1) or nodes > MAX_NODES:
+            raise ParameterError(f"nodes = {nodes} is out of range: expected a power of two "
+                                 f"4..{MAX_NODES}")
+        dtheta = 2.0 * math.pi / groups.n / nodes
+        self._p = np.array([groups.n, groups.psi, groups.lam, groups.beta, self.dt, dtheta,
+                            1.0 / dtheta], dtype=np.float64)
+        self._x = np.zeros(kn.NX)
+        self._k = np.zeros(kn.NK, dtype=np.int64)
+        self._surf = np.zeros(nodes)
+        self._c = np.zeros(kn.NC)
+        self._acc = np.zeros(kn.NA)
+        self._no_rows = np.zeros((0, kn.NO))
+        self.set_hoist_speed_limit(hoist_speed_limit)
+        self.start_at_rest()
+
+    # ---- initial conditions -------------------------------------------------------------
+    def start_steady(self, w0: float, omega0: float, perturbation: float = 0.0) -> None:
+        """The exact steady start of MODEL.md section 4; omega scaled by (1 + perturbation)."""
+        perturbation = check_number("perturbation", perturbation, low=-1.0)
+        st = steady_state(self.groups, w0, omega0)
+        self.set_commands(w0, omega0)
+        nodes = self._surf.size
+        dtheta = self._p[kn.P_DTHETA]
+        theta = np.arange(nodes) * dtheta
+        self._surf[:] = st.v0 * (theta - 2.0 * math.pi / self.groups.n) / st.omega0
+        self._surf[0] = 0.0
+        self._x[:] = 0.0
+        self._x[kn.X_V] = st.v0
+        self._x[kn.X_OMEGA] = st.omega0 * (1.0 + perturbation)
+        self._x[kn.X_PHI_TD] = st.t0
+        self._x[kn.X_S_BEHIND] = -st.delta_n0
+        self._x[kn.X_SINCE_STICK] = math.inf
+        self._x[kn.X_W] = w0
+        self._x[kn.X_T] = self._x[kn.X_TS] = st.t0
+        self._x[kn.X_DELTA] = st.delta_n0
+        self._x[kn.X_G] = 1.0
+        self._k[:] = (0, kn.REGIME_ROTATING, 0)
+        self.reset_window()
+
+    def start_at_rest(self, gap: float = 0.0) -> None:
+        """Bit at rest ``gap`` [L*] above a flat bottom, string relaxed, commands zero."""
+        gap = check_number("gap", gap, low_inclusive=True)
+        self.set_commands(0.0, 0.0)
+        self._surf[:] = 0.0
+        self._x[:] = 0.0
+        self._x[kn.X_U] = -gap
+        self._x[kn.X_SINCE_STICK] = math.inf
+        self._k[:] = (0, kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK, 0)
+        self.reset_window()
+
+    # ---- commands -----------------------------------------------------------------------
+    def set_commands(self, w0: float, omega0: float) -> None:
+        """Available weight w0 = W0/F* (any sign) and top-drive speed omega0 >= 0, held from now."""
+        self._c[kn.C_W0] = check_number("w0", w0, low=None)
+        self._c[kn.C_OMEGA0] = check_number("omega0", omega0, low_inclusive=True)
+
+    def set_hoist_speed_limit(self, limit: float) -> None:
+        """Fastest upward axial speed [L*/t*]; math.inf for none (the pure model)."""
+        if limit != math.inf:
+            limit = check_number("hoist_speed_limit", limit)
+        self._c[kn.C_V_MIN] = -limit
+
+    @property
+    def commands(self) -> tuple[float, float]:
+        return float(self._c[kn.C_W0]), float(self._c[kn.C_OMEGA0])
+
+    # ---- stepping -----------------------------------------------------------------------
+    def advance(self, n_steps: int) -> None:
+        """Advance ``n_steps`` steps with the commands held; allocation-free."""
+        kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc, n_steps,
+                   self._no_rows, 1, 0)
+
+    def advance_into(self, n_steps: int, out: np.ndarray, every: int, row: int) -> int:
+        """Advance and write a row to ``out`` every ``every`` steps; return the next free row."""
+        return int(kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
+                              n_steps, out, every, row))
+
+    def run(self, duration: float, *, output_interval: float | None = None,
+            schedule: Callable[[float], tuple[float, float]] | None = None,
+            schedule_interval: float | None = None,
+            progress: Callable[[float], None] | None = None) -> Trajectory:
+        """Advance by ``duration`` [t*] recording rows every ``output_interval`` [t*].
+
+        ``schedule(tau) -> (w0, omega0)`` is applied every ``schedule_interval`` [t*] (zero-order
+        hold); ``progress(fraction)`` is called between chunks.
+        """
+        duration = check_number("duration", duration)
+        n_total = int(round(duration / self.dt))
+        every = 1 if output_interval is None else max(1, int(round(output_interval / self.dt)))
+        out = np.empty((n_total // every + 1, kn.NO))
+        chunk = n_total if schedule is None else max(1, int(round(schedule_interval / self.dt)))
+        chunk = min(chunk, 2_000_000) if progress is not None else chunk
+        row, done = 0, 0
+        while done < n_total:
+            if schedule is not None:
+                self.set_commands(*schedule(self.tau))
+            n = min(chunk, n_total - done)
+            row = self.advance_into(n, out, every, row)
+            done += n
+            if progress is not None:
+                progress(done / n_total)
+        return Trajectory.from_rows(out[:row], self.window_metrics())
+
+    # ---- observation --------------------------------------------------------------------
+    @property
+    def tau(self) -> float:
+        return float(self._x[kn.X_TAU])
+
+    @property
+    def steps(self) -> int:
+        return int(self._k[kn.K_STEPS])
+
+    def state(self) -> StateView:
+        x, k = self._x, self._k
+        return StateView(tau=x[kn.X_TAU], u=x[kn.X_U], v=x[kn.X_V], phi=x[kn.X_PHI],
+                         omega=x[kn.X_OMEGA], phi_td=x[kn.X_PHI_TD], w=x[kn.X_W], t=x[kn.X_T],
+                         ts=x[kn.X_TS], delta_n=x[kn.X_DELTA], g=x[kn.X_G],
+                         regime=int(k[kn.K_REGIME]), since_stick=x[kn.X_SINCE_STICK])
+
+    @property
+    def stick_slip(self) -> bool:
+        """The flag of MODEL.md section 7: a stick phase within the last ``stick_window``."""
+        return bool(self._x[kn.X_SINCE_STICK] < self.stick_window)
+
+    @property
+    def hole_bottom(self) -> float:
+        """Deepest point of the rock surface [L*], positive downhole."""
+        return float(self._surf.max())
+
+    @property
+    def surface(self) -> np.ndarray:
+        """A copy of the rock surface S over one sector [L*]."""
+        return self._surf.copy()
+
+    def reset_window(self) -> None:
+        """Start a new metrics window now."""
+        self._acc[:] = 0.0
+        self._acc[kn.A_OMEGA_MIN] = math.inf
+        self._acc[kn.A_OMEGA_MAX] = -math.inf
+
+    def window_metrics(self) -> Metrics:
+        """Metrics of MODEL.md section 7 over the window since the last ``reset_window``."""
+        return Metrics.from_accumulators(self._acc)

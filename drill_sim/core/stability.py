@@ -1,0 +1,145 @@
+"""Steady drilling (MODEL.md section 4) and the roots of its characteristic function (section 5).
+
+Root finding: every root of Delta(s) with Re s >= re_min lies in the disc |s| <= R, with R from
+the bound |s|^4 <= |s|^2 (1 + (n psi + k) e_max) + n psi e_max, e_max = 1 + exp(-re_min tau_n0).
+The box [re_min, R] x [-R, R] therefore holds them all. Newton's method is started from a grid
+over the box, the distinct converged roots are kept, and their number is checked against the
+argument principle (the winding number of Delta along the box edge, sampled until no step turns
+the phase by more than pi/4). A mismatch refines the grid; the result says whether the counts
+agreed, so a caller knows none were missed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .parameters import Groups, ParameterError, check_number
+
+
+class NoSteadyDrilling(ValueError):
+    """w0 <= lambda: the weight cannot beat full wear-flat friction, so there is no drilling."""
+
+
+@dataclass(frozen=True)
+class SteadyState:
+    """The trivial solution, dimensionless (MODEL.md section 4)."""
+
+    w0: float
+    omega0: float
+    delta_n0: float   # depth of cut per blade [L*]
+    v0: float         # rate of penetration [L*/t*]
+    t0: float         # torque on bit, equal to the string torque [C]
+    tau_n0: float     # delay: time for one sector [t*]
+
+
+def steady_state(groups: Groups, w0: float, omega0: float) -> SteadyState:
+    """Steady drilling at (w0, omega0), or NoSteadyDrilling when w0 <= lambda."""
+    w0 = check_number("w0", w0, low=None)
+    omega0 = check_number("omega0", omega0)
+    if w0 <= groups.lam:
+        raise NoSteadyDrilling(
+            f"no steady drilling solution: w0 = {w0:g} <= lambda = {groups.lam:g}; the weight "
+            "cannot overcome full wear-flat friction, so the bit rotates on its wear flats "
+            "without penetrating")
+    return SteadyState(w0=w0, omega0=omega0, delta_n0=(w0 - groups.lam) / groups.n,
+                       v0=omega0 * (w0 - groups.lam) / (2.0 * math.pi),
+                       t0=w0 - (1.0 - groups.beta) * groups.lam,
+                       tau_n0=2.0 * math.pi / (groups.n * omega0))
+
+
+def characteristic(s: np.ndarray | complex, groups: Groups, steady: SteadyState):
+    """Delta(s) = (s^2 + 1)(s^2 + n psi E) - k s^2 E, E = 1 - exp(-s tau_n0), and Delta'(s)."""
+    n, psi = groups.n, groups.psi
+    k = n * (steady.w0 - groups.lam) / (2.0 * math.pi)
+    tau = steady.tau_n0
+    ex = np.exp(-s * tau)
+    e = 1.0 - ex
+    de = tau * ex
+    s2 = s * s
+    value = (s2 + 1.0) * (s2 + n * psi * e) - k * s2 * e
+    deriv = 2.0 * s * (s2 + n * psi * e) + (s2 + 1.0) * (2.0 * s + n * psi * de) \
+        - k * (2.0 * s * e + s2 * de)
+    return value, deriv
+
+
+@dataclass(frozen=True)
+class StabilityResult:
+    """Roots of Delta(s) in the box, rightmost first, without the ever-present root s = 0."""
+
+    steady: SteadyState
+    roots: np.ndarray          # complex, sorted by decreasing real part
+    re_min: float              # left edge of the search box [1/t*]
+    radius: float              # every root with Re s >= re_min has |s| <= radius
+    count_argument_principle: int   # roots in the box, s = 0 included, by the winding number
+    complete: bool             # True when the found roots match that count
+
+    @property
+    def stable(self) -> bool:
+        return bool(self.roots.size == 0 or self.roots[0].real < 0.0)
+
+    @property
+    def rightmost(self) -> complex:
+        return complex(self.roots[0])
+
+
+def stability(groups: Groups, w0: float, omega0: float, *, re_min: float = -0.5) -> StabilityResult:
+    """All roots of Delta(s) with Re s >= re_min, found and counted as the module doc says."""
+    steady = steady_state(groups, w0, omega0)
+    re_min = check_number("re_min", re_min, low=None, high=-1e-6)
+    k = groups.n * (steady.w0 - groups.lam) / (2.0 * math.pi)
+    e_max = 1.0 + math.exp(-re_min * steady.tau_n0)
+    a = 1.0 + (groups.n * groups.psi + abs(k)) * e_max
+    b = groups.n * groups.psi * e_max
+    radius = 1.05 * math.sqrt(0.5 * (a + math.sqrt(a * a + 4.0 * b)))
+    box = (re_min, radius, -radius, radius)
+    count = _winding_number(box, groups, steady)
+    roots = np.empty(0, dtype=complex)
+    for density in (40, 80, 160, 320):
+        roots = _newton_from_grid(box, groups, steady, density)
+        if roots.size == count:
+            break
+    nonzero = roots[np.abs(roots) > 1e-7]
+    order = np.lexsort((-np.abs(nonzero.imag), -nonzero.real))
+    return StabilityResult(steady=steady, roots=nonzero[order], re_min=re_min, radius=radius,
+                           count_argument_principle=count, complete=roots.size == count)
+
+
+def _winding_number(box, groups: Groups, steady: SteadyState) -> int:
+    x0, x1, y0, y1 = box
+    corners = [complex(x0, y0), complex(x1, y0), complex(x1, y1), complex(x0, y1), complex(x0, y0)]
+    points = 2048
+    while True:
+        path = np.concatenate([np.linspace(corners[i], corners[i + 1], points, endpoint=False)
+                               for i in range(4)] + [np.array([corners[0]])])
+        value, _ = characteristic(path, groups, steady)
+        if np.any(np.abs(value) == 0.0):
+            raise ParameterError("a root of Delta(s) lies on the search box edge; change re_min")
+        steps = np.diff(np.unwrap(np.angle(value)))
+        if np.max(np.abs(steps)) < math.pi / 4 or points > 2**21:
+            return int(round(np.sum(steps) / (2.0 * math.pi)))
+        points *= 4
+
+
+def _newton_from_grid(box, groups: Groups, steady: SteadyState, density: int) -> np.ndarray:
+    x0, x1, y0, y1 = box
+    re = np.linspace(x0, x1, density)
+    im = np.linspace(y0, y1, 2 * density)
+    s = (re[None, :] + 1j * im[:, None]).ravel()
+    for _ in range(60):
+        value, deriv = characteristic(s, groups, steady)
+        with np.errstate(all="ignore"):
+            step = value / deriv
+        step[~np.isfinite(step)] = 0.0
+        s = s - step
+        s = np.where(np.abs(s) > 4.0 * max(abs(x0), x1, y1), np.nan, s)
+    value, deriv = characteristic(s, groups, steady)
+    good = np.isfinite(s) & (np.abs(value) <= 1e-9 * (1.0 + np.abs(s) ** 4))
+    good &= (s.real >= x0) & (s.real <= x1) & (s.imag >= y0) & (s.imag <= y1)
+    found: list[complex] = []
+    for root in s[good]:
+        if all(abs(root - other) > 1e-6 * (1.0 + abs(root)) for other in found):
+            found.append(complex(root))
+    return np.array(found, dtype=complex)

@@ -1,0 +1,43 @@
+"""drill_sim: ament_python package, installable with pip and with colcon on ROS 2 Jazzy."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = "drill_sim"
+
+setup(
+    name=package_name,
+    version="0.1.0",
+    packages=find_packages(exclude=["tests", "tests.*", "benchmarks"]),
+    package_data={package_name: ["presets/*.yaml"]},
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+        ("share/" + package_name + "/presets", glob("drill_sim/presets/*.yaml")),
+    ],
+    python_requires=">=3.10",
+    install_requires=[
+        "ros-jazzy-rclpy[fastrtps]==7.1.6",
+        "ros-jazzy-common-interfaces==5.3.6",
+        "numpy>=1.26",
+        "numba>=0.60",
+        "mcap>=1.2",
+        "pyyaml>=6",
+        "matplotlib>=3.8",
+    ],
+    extras_require={
+        "test": ["pytest>=8", "hypothesis>=6.100", "ruff>=0.6", "scipy>=1.11"],
+    },
+    zip_safe=False,
+    maintainer="drill_sim developers",
+    maintainer_email="drill-sim@example.com",
+    description="Real-time simulator of a rotary drilling rig's drill string and drag bit "
+                "(Richard-Germay-Detournay model) for stick-slip controller testing",
+    license="Apache-2.0",
+    entry_points={
+        "console_scripts": [
+            "drill_sim = drill_sim.cli.main:main",
+        ],
+    },
+)
