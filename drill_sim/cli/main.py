@@ -18,8 +18,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import (RPM, Groups, NoSteadyDrilling, ParameterError, Preset, Simulator, load_preset,
-                    preset_names, stability, steady_state)
+from ..core import (
+    RPM,
+    Groups,
+    NoSteadyDrilling,
+    ParameterError,
+    Preset,
+    Simulator,
+    load_preset,
+    preset_names,
+    stability,
+    steady_state,
+)
 from ..core.simulator import DEFAULT_DT, Trajectory
 from .plot import plot_time_series
 from .progress import Progress

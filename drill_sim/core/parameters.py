@@ -42,14 +42,16 @@ def check_number(name: str, value: object, *, low: float | None = 0.0,
 def check_blade_count(value: object) -> int:
     """The blade count must be a whole number from 1 to 64."""
     if isinstance(value, bool):
-        raise ParameterError(f"n (blade count) = {value!r} is not a whole number: expected an integer 1..64")
+        raise ParameterError(f"n (blade count) = {value!r} is not a whole number: "
+                             "expected an integer 1..64")
     try:
         as_float = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
         raise ParameterError(f"n (blade count) = {value!r} is not a whole number: "
                              "expected an integer 1..64") from None
     if not math.isfinite(as_float) or as_float != int(as_float) or not 1 <= as_float <= 64:
-        raise ParameterError(f"n (blade count) = {value!r} is out of range: expected an integer 1..64")
+        raise ParameterError(f"n (blade count) = {value!r} is out of range: "
+                             "expected an integer 1..64")
     return int(as_float)
 
 

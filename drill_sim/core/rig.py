@@ -96,7 +96,7 @@ class Rig:
                               perturbation)
 
     def start_at_rest(self, gap_m: float = 0.0) -> None:
-        """Bit at rest ``gap_m`` above a flat bottom, string hanging (hook load = W_s), no rotation."""
+        """Bit at rest ``gap_m`` above a flat bottom, hanging (hook load = W_s), not rotating."""
         self.sim.start_at_rest(check_number("gap_m", gap_m, low_inclusive=True)
                                / self.scales.length_m)
         self.command(0.0, self.params.submerged_weight_n)
@@ -115,7 +115,7 @@ class Rig:
         """Advance to the last step at or before ``time_s``; return the steps taken."""
         if not math.isfinite(time_s):
             raise ParameterError(f"time_s = {time_s!r} is not finite")
-        n = int(math.floor(time_s / self.dt_s + 1e-9)) - self.sim.steps
+        n = math.floor(time_s / self.dt_s + 1e-9) - self.sim.steps
         if n > 0:
             self.sim.advance(n)
         return max(n, 0)

@@ -156,8 +156,9 @@ class Simulator:
     # ---- commands -----------------------------------------------------------------------
     def set_commands(self, w0: float, omega0: float) -> None:
         """Available weight w0 = W0/F* (any sign) and top-drive speed omega0 >= 0, held from now."""
-        self._c[kn.C_W0] = check_number("w0", w0, low=None)
-        self._c[kn.C_OMEGA0] = check_number("omega0", omega0, low_inclusive=True)
+        w0 = check_number("w0", w0, low=None)
+        omega0 = check_number("omega0", omega0, low_inclusive=True)
+        self._c[kn.C_W0], self._c[kn.C_OMEGA0] = w0, omega0   # both valid, or neither set
 
     def set_hoist_speed_limit(self, limit: float) -> None:
         """Fastest upward axial speed [L*/t*]; math.inf for none (the pure model)."""
@@ -184,16 +185,19 @@ class Simulator:
             schedule: Callable[[float], tuple[float, float]] | None = None,
             schedule_interval: float | None = None,
             progress: Callable[[float], None] | None = None) -> Trajectory:
-        """Advance by ``duration`` [t*] recording rows every ``output_interval`` [t*].
+        """Advance by ``duration`` [t*] recording rows every ``output_interval`` [t*] (None: none).
 
         ``schedule(tau) -> (w0, omega0)`` is applied every ``schedule_interval`` [t*] (zero-order
         hold); ``progress(fraction)`` is called between chunks.
         """
         duration = check_number("duration", duration)
-        n_total = int(round(duration / self.dt))
-        every = 1 if output_interval is None else max(1, int(round(output_interval / self.dt)))
-        out = np.empty((n_total // every + 1, kn.NO))
-        chunk = n_total if schedule is None else max(1, int(round(schedule_interval / self.dt)))
+        n_total = round(duration / self.dt)
+        if output_interval is None:
+            every, out = 1, self._no_rows
+        else:
+            every = max(1, round(check_number("output_interval", output_interval) / self.dt))
+            out = np.empty((n_total // every + 1, kn.NO))
+        chunk = n_total if schedule is None else max(1, round(schedule_interval / self.dt))
         chunk = min(chunk, 2_000_000) if progress is not None else chunk
         row, done = 0, 0
         while done < n_total:

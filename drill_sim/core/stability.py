@@ -102,7 +102,7 @@ def stability(groups: Groups, w0: float, omega0: float, *, re_min: float = -0.5)
         if roots.size == count:
             break
     nonzero = roots[np.abs(roots) > 1e-7]
-    order = np.lexsort((-np.abs(nonzero.imag), -nonzero.real))
+    order = np.lexsort((-nonzero.imag, -np.round(nonzero.real, 9)))   # pairs: +i first
     return StabilityResult(steady=steady, roots=nonzero[order], re_min=re_min, radius=radius,
                            count_argument_principle=count, complete=roots.size == count)
 
@@ -119,7 +119,7 @@ def _winding_number(box, groups: Groups, steady: SteadyState) -> int:
             raise ParameterError("a root of Delta(s) lies on the search box edge; change re_min")
         steps = np.diff(np.unwrap(np.angle(value)))
         if np.max(np.abs(steps)) < math.pi / 4 or points > 2**21:
-            return int(round(np.sum(steps) / (2.0 * math.pi)))
+            return round(np.sum(steps) / (2.0 * math.pi))
         points *= 4
 
 

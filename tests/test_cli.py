@@ -1,0 +1,96 @@
+"""The ``drill_sim`` console script, run as a user runs it: the installed entry point."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+
+import pytest
+from conftest import installed
+
+
+def run(*args: str, check: bool = True) -> subprocess.CompletedProcess:
+    proc = subprocess.run([installed("drill_sim"), *args], capture_output=True, text=True,
+                          timeout=300)
+    if check:
+        assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+def test_simulate_si_writes_csv_plot_and_json(tmp_path):
+    out, png = tmp_path / "run.csv", tmp_path / "run.png"
+    proc = run("simulate", "--preset", "base", "--rpm", "60", "--wob-kn", "100", "--duration",
+               "60", "--out", str(out), "--plot", str(png), "--output-interval", "0.05", "--json")
+    summary = json.loads(proc.stdout)
+    for key in ("ssi", "stick_fraction", "bounce_fraction", "mean_bit_speed", "mean_wob",
+                "mean_tob", "mean_surface_torque", "mean_rop"):
+        assert isinstance(summary[key], float), key
+    assert summary["mean_wob"] == pytest.approx(100e3, rel=0.01)        # N
+    assert summary["mean_bit_speed"] == pytest.approx(6.2832, rel=0.05)  # rad/s
+    with open(out, newline="") as fh:
+        rows = list(csv.reader(fh))
+    for column in ("time_s", "bit_speed_rad_s", "rop_m_s", "wob_n", "tob_nm", "surface_torque_nm",
+                   "depth_of_cut_m", "stuck", "off_bottom"):
+        assert column in rows[0]
+    assert len(rows) == 1 + 1200
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_simulate_groups_mode_is_dimensionless(tmp_path):
+    out = tmp_path / "g.csv"
+    proc = run("simulate", "--groups", "n=4,psi=13.73,lambda=6.84,beta=0.36", "--w0", "9.6",
+               "--omega0", "1.32", "--duration", "100", "--out", str(out), "--json")
+    summary = json.loads(proc.stdout)
+    assert summary["mean_wob"] == pytest.approx(9.6, rel=0.01)
+    assert summary["stick_fraction"] > 0.2
+    header = out.read_text().splitlines()[0].split(",")
+    assert {"tau", "omega", "v", "w", "t", "ts", "delta_n", "stuck", "off_bottom"} <= set(header)
+
+
+def test_text_summary_has_units():
+    proc = run("simulate", "--duration", "5")
+    assert "rpm" in proc.stdout and "kN" in proc.stdout and "stick fraction" in proc.stdout
+
+
+def test_stability_json():
+    proc = run("stability", "--preset", "base", "--json")
+    out = json.loads(proc.stdout)
+    assert out["complete"] and not out["stable"]
+    re, im = out["roots"][0]
+    assert re == pytest.approx(0.749, abs=0.01) and abs(im) == pytest.approx(8.45, abs=0.05)
+    assert out["si"]["wob_n"] == pytest.approx(1e5)
+
+
+def test_stability_without_steady_drilling_says_so():
+    proc = run("stability", "--wob-kn", "20", "--json")
+    out = json.loads(proc.stdout)
+    assert out["steady_drilling"] is False and "no steady drilling" in out["reason"]
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (("simulate", "--rpm", "nan"), "--rpm"),
+    (("simulate", "--rpm", "-10"), "--rpm"),
+    (("simulate", "--rpm", "fast"), "--rpm"),
+    (("simulate", "--wob-kn", "1e6"), "submerged weight"),
+    (("simulate", "--hook-load-kn", "-1"), "--hook-load-kn"),
+    (("simulate", "--duration", "0"), "--duration"),
+    (("simulate", "--dt", "inf"), "--dt"),
+    (("simulate", "--dt", "1"), "dt"),
+    (("simulate", "--preset", "nowhere"), "preset"),
+    (("simulate", "--groups", "n=4,psi=1"), "--groups"),
+    (("simulate", "--groups", "n=4,psi=1,lambda=1,beta=1"), "--w0"),
+    (("simulate", "--groups", "n=0,psi=1,lambda=1,beta=1", "--w0", "1", "--omega0", "1"),
+     "blade count"),
+    (("simulate", "--w0", "3"), "--groups"),
+    (("simulate", "--out", "/no/such/dir/x.csv"), "does not exist"),
+    (("simulate", "--start", "steady", "--wob-kn", "10"), "no steady drilling"),
+    (("stability", "--re-min", "1"), "--re-min"),
+    (("frobnicate",), "invalid choice"),
+])
+def test_bad_arguments_exit_2_with_one_clear_line(args, fragment):
+    proc = run(*args, check=False)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0], proc.stderr
+    assert "Traceback" not in proc.stderr
