@@ -54,9 +54,8 @@ class Rig:
         self.groups = params.groups
         ts = self.scales.time_s
         dt = DEFAULT_DT if dt_s is None else check_number("dt_s", dt_s) / ts
-        window = 4.0 * math.pi if stick_window_s is None else \
-            check_number("stick_window_s", stick_window_s) / ts
-        self.sim = Simulator(self.groups, dt, stick_window=window)
+        self.sim = Simulator(self.groups, dt)
+        self.set_stick_window(4.0 * math.pi * ts if stick_window_s is None else stick_window_s)
         self.set_hoist_speed_limit(hoist_speed_limit_m_s)
         self._hook_load_n = params.submerged_weight_n
         self._speed_rad_s = 0.0
@@ -73,12 +72,41 @@ class Rig:
         return speed_rad_s * self.scales.time_s
 
     def set_hoist_speed_limit(self, limit_m_s: float) -> None:
+        """The string rises no faster than this [m/s]; math.inf for no limit."""
         if limit_m_s != math.inf:
             limit_m_s = check_number("hoist_speed_limit_m_s", limit_m_s)
+        self.hoist_speed_limit_m_s = limit_m_s
         self.sim.set_hoist_speed_limit(limit_m_s / self.scales.velocity_m_s)
 
     def set_stick_window(self, window_s: float) -> None:
-        self.sim.stick_window = check_number("stick_window_s", window_s) / self.scales.time_s
+        """How long the stick-slip flag stays up after the bit was last stuck [s]."""
+        self.stick_window_s = check_number("stick_window_s", window_s)
+        self.sim.stick_window = self.stick_window_s / self.scales.time_s
+
+    def replace_parameters(self, params: RigParameters) -> None:
+        """Swap in new SI parameters at run time, keeping the physical state: bit position,
+        speeds, string twist, the rock surface and the clock. The blade count cannot change
+        (the surface's sector would), so that needs a new Rig."""
+        if params.blade_count != self.params.blade_count:
+            raise ParameterError(f"blade_count cannot change while running "
+                                 f"({self.params.blade_count} -> {params.blade_count}): "
+                                 "it changes the rock surface's sector; reset instead")
+        old, new = self.scales, params.scales
+        s = self.sim.state()
+        sim = Simulator(params.groups, self.dt_s / new.time_s)
+        length = old.length_m / new.length_m
+        sim.load_state(tau=s.tau * old.time_s / new.time_s, steps=self.sim.steps,
+                       u=s.u * length, v=s.v * old.velocity_m_s / new.velocity_m_s, phi=s.phi,
+                       omega=s.omega * new.time_s / old.time_s, phi_td=s.phi_td,
+                       surface=self.sim.surface * length, regime=s.regime,
+                       since_stick=s.since_stick * old.time_s / new.time_s,
+                       w=s.w * old.force_n / new.force_n,
+                       t=s.t * old.stiffness_nm_per_rad / new.stiffness_nm_per_rad,
+                       delta_n=s.delta_n * length, g=s.g)
+        self.params, self.scales, self.groups, self.sim = params, new, params.groups, sim
+        self.set_stick_window(self.stick_window_s)
+        self.set_hoist_speed_limit(self.hoist_speed_limit_m_s)
+        self.command(self._speed_rad_s, self._hook_load_n)
 
     # ---- commands and initial states ----------------------------------------------------
     def command(self, top_drive_speed_rad_s: float, hook_load_n: float) -> None:

@@ -153,6 +153,29 @@ class Simulator:
         self._k[:] = (0, kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK, 0)
         self.reset_window()
 
+    def load_state(self, *, tau: float, steps: int, u: float, v: float, phi: float, omega: float,
+                   phi_td: float, surface: np.ndarray, regime: int, since_stick: float,
+                   w: float = 0.0, t: float = 0.0, delta_n: float = 0.0, g: float = 0.0) -> None:
+        """Put the bit, string and rock in a given state (dimensionless); ``surface`` is S over
+        one sector at any even spacing and is resampled onto this simulator's nodes; w, t,
+        delta_n and g are what the last step's outputs read until the next step."""
+        values = np.array([tau, u, v, phi, omega, phi_td, since_stick], dtype=float)
+        if not np.all(np.isfinite(values[:6])) or not np.all(np.isfinite(surface)):
+            raise ParameterError("load_state: the state must be finite")
+        nodes = self._surf.size
+        src = np.asarray(surface, dtype=float)
+        x_src = np.arange(src.size + 1) / src.size
+        x_dst = np.arange(nodes) / nodes
+        self._surf[:] = np.interp(x_dst, x_src, np.append(src, src[0]))
+        k_last = math.floor(phi * self._p[kn.P_INV_DTHETA])
+        x = self._x
+        x[kn.X_TAU], x[kn.X_U], x[kn.X_V], x[kn.X_PHI], x[kn.X_OMEGA], x[kn.X_PHI_TD] = values[:6]
+        x[kn.X_SINCE_STICK] = since_stick
+        x[kn.X_TS] = phi_td - phi
+        x[kn.X_W], x[kn.X_T], x[kn.X_DELTA], x[kn.X_G] = w, t, delta_n, g
+        x[kn.X_S_BEHIND] = self._surf[k_last & (nodes - 1)]
+        self._k[:] = (k_last, regime, steps)
+
     # ---- commands -----------------------------------------------------------------------
     def set_commands(self, w0: float, omega0: float) -> None:
         """Available weight w0 = W0/F* (any sign) and top-drive speed omega0 >= 0, held from now."""

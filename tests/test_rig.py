@@ -1,0 +1,76 @@
+"""The SI face of the core: commands, time keeping, run-time parameter changes, hoisting."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import pytest
+
+from drill_sim.core import ParameterError, Rig
+
+
+def test_si_steady_start_reads_the_steady_state(base):
+    rig = Rig(base.rig)
+    rig.start_steady(base.top_drive_speed_rad_s, base.hook_load_n)
+    rig.advance(0.5)
+    s = rig.sample()
+    st = rig.steady_state(base.top_drive_speed_rad_s, base.hook_load_n)
+    assert s.wob_n == pytest.approx(1e5, rel=1e-6)
+    assert s.bit_speed_rad_s == pytest.approx(2 * math.pi, rel=1e-6)
+    assert s.tob_nm == pytest.approx(st.t0 * rig.scales.stiffness_nm_per_rad, rel=1e-6)
+    assert s.time_s == pytest.approx(0.5, abs=rig.dt_s)
+
+
+def test_advance_to_counts_whole_steps(base):
+    rig = Rig(base.rig, dt_s=1e-4)
+    assert rig.advance_to(0.01) == 100
+    assert rig.advance_to(0.01) == 0
+    assert rig.advance_to(0.005) == 0            # never backwards
+    with pytest.raises(ParameterError):
+        rig.advance_to(math.nan)
+
+
+def test_bad_commands_are_refused_and_change_nothing(base):
+    rig = Rig(base.rig)
+    rig.start_steady(base.top_drive_speed_rad_s, base.hook_load_n)
+    before = rig.sim.commands
+    for speed, hook in ((math.nan, 1e5), (-1.0, 1e5), (1.0, -5.0), (1.0, math.inf)):
+        with pytest.raises(ParameterError):
+            rig.command(speed, hook)
+    assert rig.sim.commands == before
+
+
+def test_parameter_change_keeps_the_physical_state(base):
+    rig = Rig(base.rig)
+    rig.start_steady(base.top_drive_speed_rad_s, base.hook_load_n, 1e-3)
+    rig.advance(10.0)
+    a = rig.sample()
+    stiffer = replace(base.rig, torsional_stiffness_nm_per_rad=1200.0, bha_mass_kg=15000.0)
+    rig.replace_parameters(stiffer)
+    b = rig.sample()
+    for field in ("time_s", "bit_speed_rad_s", "rop_m_s", "bit_depth_m", "bit_angle_rad",
+                  "top_drive_angle_rad", "hole_depth_m"):
+        assert getattr(b, field) == pytest.approx(getattr(a, field), rel=1e-6, abs=1e-9), field
+    # the string torque follows the new stiffness at the same twist
+    assert b.surface_torque_nm == pytest.approx(a.surface_torque_nm * 1200.0
+                                                / base.rig.torsional_stiffness_nm_per_rad)
+    rig.advance(5.0)
+    assert math.isfinite(rig.sample().wob_n)
+    with pytest.raises(ParameterError, match="blade_count"):
+        rig.replace_parameters(replace(base.rig, blade_count=5))
+
+
+def test_hook_load_above_string_weight_lifts_the_bit_at_the_hoisting_limit(base):
+    rig = Rig(base.rig, hoist_speed_limit_m_s=0.5)
+    rig.start_steady(base.top_drive_speed_rad_s, base.hook_load_n)
+    rig.advance(2.0)
+    rig.command(base.top_drive_speed_rad_s, base.rig.submerged_weight_n * 1.1)
+    rig.advance(3.0)
+    s = rig.sample()
+    assert s.off_bottom and s.wob_n == 0.0 and s.tob_nm == 0.0
+    assert s.rop_m_s == pytest.approx(-0.5)          # rising at the limit, not accelerating
+    rig.command(base.top_drive_speed_rad_s, base.hook_load_n)
+    rig.advance(20.0)
+    s = rig.sample()
+    assert not s.off_bottom and s.wob_n > 0           # back down on the rock
