@@ -10,11 +10,13 @@ setup(
     name=package_name,
     version="0.1.0",
     packages=find_packages(exclude=["tests", "tests.*", "benchmarks"]),
-    package_data={package_name: ["presets/*.yaml"]},
+    package_data={package_name: ["presets/*.yaml", "scenarios/*.yaml", "config/*.yaml"]},
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
         ("share/" + package_name + "/presets", glob("drill_sim/presets/*.yaml")),
+        ("share/" + package_name + "/scenarios", glob("drill_sim/scenarios/*.yaml")),
+        ("share/" + package_name + "/config", glob("drill_sim/config/*.yaml")),
     ],
     python_requires=">=3.10",
     install_requires=[
@@ -38,6 +40,8 @@ setup(
     entry_points={
         "console_scripts": [
             "drill_sim = drill_sim.cli.main:main",
+            "drill_sim_node = drill_sim.ros.node:main",
+            "drill_sim_drive = drill_sim.ros.driver:main",
         ],
     },
 )

@@ -31,8 +31,10 @@ from ..core import (
     steady_state,
 )
 from ..core.simulator import DEFAULT_DT, Trajectory
+from .errors import UsageError
 from .plot import plot_time_series
 from .progress import Progress
+from .run import add_arguments, run_session
 
 SI_COLUMNS = ("time_s", "bit_speed_rad_s", "rop_m_s", "wob_n", "tob_nm", "surface_torque_nm",
               "depth_of_cut_m", "bit_depth_m", "top_drive_speed_rad_s", "stuck", "off_bottom")
@@ -40,10 +42,6 @@ GROUP_COLUMNS = ("tau", "omega", "v", "w", "t", "ts", "delta_n", "u", "omega0", 
                  "off_bottom")
 SUMMARY_KEYS = ("ssi", "stick_fraction", "bounce_fraction", "mean_bit_speed", "mean_wob",
                 "mean_tob", "mean_surface_torque", "mean_rop")
-
-
-class UsageError(Exception):
-    """A bad command-line argument: reported on one line, exit status 2."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -103,6 +101,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="metrics over the last this much time [s] or [t*]; default: last half")
     sim.add_argument("--plot", type=Path, help="PNG of bit speed, WOB and TOB against time")
     sim.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+
+    run = sub.add_parser("run", help="the main job: rig node + scenario driver, live status, "
+                                     "summary and plot")
+    add_arguments(run)
 
     stab = sub.add_parser("stability", help="steady drilling and the rightmost roots of Delta(s)")
     model_args(stab)
@@ -387,6 +389,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
+        if args.command == "run":
+            return run_session(args)
         return {"simulate": cmd_simulate, "stability": cmd_stability}[args.command](args)
     except (UsageError, ParameterError) as exc:
         print(f"drill_sim: error: {exc}", file=sys.stderr)

@@ -116,6 +116,14 @@ class Rig:
         self.sim.set_commands(self.w0_of(hook), self.omega0_of(speed))
         self._speed_rad_s, self._hook_load_n = speed, hook
 
+    @property
+    def commanded_speed_rad_s(self) -> float:
+        return self._speed_rad_s
+
+    @property
+    def commanded_hook_load_n(self) -> float:
+        return self._hook_load_n
+
     def start_steady(self, top_drive_speed_rad_s: float, hook_load_n: float,
                      perturbation: float = 0.0) -> None:
         """Start exactly on steady drilling at these commands (bit speed times 1 + perturbation)."""

@@ -1,0 +1,125 @@
+"""Driller scenarios: surface set points against time, as a driller would give them.
+
+A scenario YAML has ``duration_s``, the rig ``initial_state`` it expects (``steady`` or
+``rest``) and a list of ``points``; each point has ``at_s`` and sets one
+or both channels: top-drive speed (``rpm`` or ``top_drive_speed_rad_s``) and load (``wob_kn``,
+the available weight W0 = W_s - H0, or ``hook_load_kn``). With ``ramp: true`` the channels it sets
+ramp linearly from their previous set point; otherwise they step at ``at_s``.
+"""
+
+from __future__ import annotations
+
+import math
+from bisect import bisect_right
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import yaml
+
+from .parameters import ParameterError, check_number
+from .rig import RPM
+
+_KEYS = {"at_s", "rpm", "top_drive_speed_rad_s", "wob_kn", "hook_load_kn", "ramp"}
+
+
+@dataclass(frozen=True)
+class _Point:
+    at_s: float
+    value: float
+    ramp: bool
+    is_wob: bool = False      # load channel: value is W0 [N] rather than H0 [N]
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Set points for the top-drive speed [rad/s] and the hook load [N] against time [s]."""
+
+    name: str
+    description: str
+    duration_s: float
+    initial_state: str          # the rig's initial_state this scenario is written for
+    speed: tuple[_Point, ...]
+    load: tuple[_Point, ...]
+
+    def commands_at(self, t_s: float, submerged_weight_n: float) -> tuple[float, float]:
+        """(top-drive speed [rad/s], hook load [N]) at time ``t_s``; W0 set points use W_s."""
+        speed = _value(self.speed, t_s, lambda p: p.value)
+        hook = _value(self.load, t_s, lambda p: submerged_weight_n - p.value if p.is_wob
+                      else p.value)
+        return speed, max(hook, 0.0)
+
+
+def _value(points: tuple[_Point, ...], t: float, value) -> float:
+    i = bisect_right([p.at_s for p in points], t) - 1
+    if i < 0:
+        return value(points[0])
+    if i + 1 < len(points) and points[i + 1].ramp:
+        a, b = points[i], points[i + 1]
+        f = (t - a.at_s) / (b.at_s - a.at_s)
+        return value(a) + f * (value(b) - value(a))
+    return value(points[i])
+
+
+def scenario_names() -> list[str]:
+    folder = resources.files("drill_sim") / "scenarios"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
+
+
+def load_scenario(name_or_path: str | Path) -> Scenario:
+    """A shipped scenario by name (``tag_bottom``, ``step_test``) or any scenario YAML file."""
+    text_name = str(name_or_path)
+    if text_name in scenario_names():
+        text = (resources.files("drill_sim") / "scenarios" / f"{text_name}.yaml").read_text()
+        name = text_name
+    else:
+        path = Path(text_name)
+        if not path.is_file():
+            raise ParameterError(f"scenario {text_name!r} is neither a shipped scenario "
+                                 f"({', '.join(scenario_names())}) nor a readable YAML file")
+        text, name = path.read_text(encoding="utf-8"), path.stem
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ParameterError(f"scenario {text_name!r} is not valid YAML: {exc}") from None
+    return scenario_from_dict(name, data)
+
+
+def scenario_from_dict(name: str, data: object) -> Scenario:
+    if not isinstance(data, dict) or not isinstance(data.get("points"), list) \
+            or not data["points"]:
+        raise ParameterError(f"scenario {name!r}: expected a mapping with a non-empty list "
+                             "'points' and 'duration_s'")
+    duration = check_number(f"scenario {name!r} duration_s", data.get("duration_s"))
+    speed: list[_Point] = []
+    load: list[_Point] = []
+    last = -math.inf
+    for i, raw in enumerate(data["points"]):
+        where = f"scenario {name!r} point {i}"
+        if not isinstance(raw, dict) or set(raw) - _KEYS or "at_s" not in raw:
+            raise ParameterError(f"{where}: expected a mapping with at_s and any of "
+                                 f"{', '.join(sorted(_KEYS - {'at_s'}))}; got {raw!r}")
+        at = check_number(f"{where} at_s", raw["at_s"], low_inclusive=True)
+        if at <= last:
+            raise ParameterError(f"{where}: at_s = {at:g} does not increase")
+        last = at
+        ramp = bool(raw.get("ramp", False))
+        speeds = [k for k in ("rpm", "top_drive_speed_rad_s") if k in raw]
+        loads = [k for k in ("wob_kn", "hook_load_kn") if k in raw]
+        if len(speeds) > 1 or len(loads) > 1 or not speeds + loads:
+            raise ParameterError(f"{where}: give at most one speed (rpm or "
+                                 "top_drive_speed_rad_s) and one load (wob_kn or hook_load_kn)")
+        for key in speeds:
+            v = check_number(f"{where} {key}", raw[key], low_inclusive=True)
+            speed.append(_Point(at, v * RPM if key == "rpm" else v, ramp))
+        for key in loads:
+            v = check_number(f"{where} {key}", raw[key], low_inclusive=True)
+            load.append(_Point(at, 1e3 * v, ramp, is_wob=key == "wob_kn"))
+    if not speed or not load:
+        raise ParameterError(f"scenario {name!r}: needs at least one speed and one load point")
+    initial = data.get("initial_state", "steady")
+    if initial not in ("steady", "rest"):
+        raise ParameterError(f"scenario {name!r}: initial_state = {initial!r}: expected steady "
+                             "or rest")
+    return Scenario(name, str(data.get("description", "")), duration, initial, tuple(speed),
+                    tuple(load))

@@ -1,0 +1,113 @@
+"""``drill_sim_drive``: plays a driller scenario onto the rig's command topics.
+
+It reads the string's submerged weight from the rig node (to turn WOB set points into hook
+loads), waits until the rig subscribes to both command topics, then publishes the set points at
+``--rate-hz`` on the node's clock (so it follows ``/clock`` with ``use_sim_time:=true``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import rclpy
+from geometry_msgs.msg import TwistStamped, WrenchStamped
+from rcl_interfaces.srv import GetParameters
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.utilities import remove_ros_args
+
+from ..core import ParameterError
+from ..core.scenario import Scenario, load_scenario, scenario_names
+from . import interface as itf
+
+
+class ScenarioDriver(Node):
+    def __init__(self, scenario: Scenario, *, rig: str, rate_hz: float, loop: bool,
+                 reliability: str = "reliable") -> None:
+        super().__init__("drill_sim_drive")
+        self.scenario, self.loop = scenario, loop
+        q = itf.qos(reliability)
+        self.pub_speed = self.create_publisher(TwistStamped, f"{rig}/cmd/top_drive", q)
+        self.pub_hook = self.create_publisher(WrenchStamped, f"{rig}/cmd/hook_load", q)
+        self.params_client = self.create_client(GetParameters, f"{rig}/get_parameters")
+        self.submerged_weight_n: float | None = None
+        self.t0_ns: int | None = None
+        self.done = False
+        self.speed_msg, self.hook_msg = TwistStamped(), WrenchStamped()
+        self.speed_msg.header.frame_id = self.hook_msg.header.frame_id = itf.FRAME_TOP_DRIVE
+        self.create_timer(1.0 / rate_hz, self._tick)
+        self._pending = None
+
+    def _tick(self) -> None:
+        if self.submerged_weight_n is None:
+            self._ask_weight()
+            return
+        if self.t0_ns is None:
+            if self.pub_speed.get_subscription_count() and self.pub_hook.get_subscription_count():
+                self.t0_ns = self.get_clock().now().nanoseconds
+                self.get_logger().info(f"playing scenario '{self.scenario.name}' "
+                                       f"({self.scenario.duration_s:g} s)")
+            return
+        now = self.get_clock().now()
+        t = (now.nanoseconds - self.t0_ns) * 1e-9
+        if t > self.scenario.duration_s:
+            if not self.loop:
+                self.done = True
+                return
+            self.t0_ns = now.nanoseconds
+            t = 0.0
+        speed, hook = self.scenario.commands_at(t, self.submerged_weight_n)
+        stamp = now.to_msg()
+        self.speed_msg.header.stamp = self.hook_msg.header.stamp = stamp
+        self.speed_msg.twist.angular.z = speed
+        self.hook_msg.wrench.force.z = hook
+        self.pub_speed.publish(self.speed_msg)
+        self.pub_hook.publish(self.hook_msg)
+
+    def _ask_weight(self) -> None:
+        if self._pending is None:
+            if not self.params_client.service_is_ready():
+                return
+            self._pending = self.params_client.call_async(
+                GetParameters.Request(names=["submerged_weight_n"]))
+        elif self._pending.done():
+            values = self._pending.result().values
+            self.submerged_weight_n = float(values[0].double_value)
+            self._pending = None
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv if argv is None else argv
+    parser = argparse.ArgumentParser(prog="drill_sim_drive", description=__doc__.split("\n")[0])
+    parser.add_argument("scenario", nargs="?", default="tag_bottom",
+                        help=f"shipped ({', '.join(scenario_names())}) or a scenario YAML file")
+    parser.add_argument("--rig", default=itf.NODE_NAME, help="name of the rig node")
+    parser.add_argument("--rate-hz", type=float, default=50.0, help="command rate [Hz]")
+    parser.add_argument("--loop", action="store_true", help="repeat the scenario")
+    parser.add_argument("--qos-reliability", choices=("reliable", "best_effort"),
+                        default="reliable")
+    args = parser.parse_args(remove_ros_args(argv)[1:])
+    if not 0 < args.rate_hz <= 1000:
+        parser.error(f"--rate-hz = {args.rate_hz:g}: expected 0 < rate <= 1000")
+    try:
+        scenario = load_scenario(args.scenario)
+    except ParameterError as exc:
+        parser.error(str(exc))
+    rclpy.init(args=argv)
+    node = ScenarioDriver(scenario, rig=args.rig, rate_hz=args.rate_hz, loop=args.loop,
+                          reliability=args.qos_reliability)
+    try:
+        while rclpy.ok() and not node.done:
+            rclpy.spin_once(node, timeout_sec=0.1)
+        node.get_logger().info("scenario finished")
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
