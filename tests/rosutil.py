@@ -1,0 +1,60 @@
+"""Helpers for tests that start nodes: isolation, subprocess nodes, waiting for events."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import time
+from collections.abc import Callable
+
+import rclpy
+from conftest import installed
+from rclpy.node import Node
+
+
+def isolate() -> int:
+    """Give this test process (and the nodes it starts) its own DDS domain, loopback only."""
+    domain = 1 + (os.getpid() % 100)
+    os.environ["ROS_DOMAIN_ID"] = str(domain)
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    return domain
+
+
+def wait_for(condition: Callable[[], bool], node: Node, timeout_s: float, what: str) -> None:
+    """Spin ``node`` until ``condition()`` holds; fail naming ``what`` after ``timeout_s``."""
+    end = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() > end:
+            raise AssertionError(f"timed out after {timeout_s:g} s waiting for {what}")
+        rclpy.spin_once(node, timeout_sec=0.01)
+
+
+def spin_for(node: Node, seconds: float) -> None:
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.01)
+
+
+class NodeProcess:
+    """An installed console script run in a subprocess, stopped with SIGINT on exit."""
+
+    def __init__(self, name: str, *args: str) -> None:
+        self.proc = subprocess.Popen([installed(name), *args], stdout=subprocess.PIPE,
+                                     stderr=subprocess.STDOUT, text=True, env=dict(os.environ))
+
+    def stop(self, timeout_s: float = 10.0) -> tuple[int, str]:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+        try:
+            out, _ = self.proc.communicate(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            out, _ = self.proc.communicate()
+        return self.proc.returncode, out
+
+    def __enter__(self) -> NodeProcess:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
