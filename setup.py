@@ -29,7 +29,7 @@ setup(
         "matplotlib>=3.8",
     ],
     extras_require={
-        "test": ["pytest>=8", "hypothesis>=6.100", "ruff>=0.6"],
+        "test": ["pytest>=8", "hypothesis>=6.100", "ruff>=0.6", "colcon-common-extensions>=0.3"],
     },
     zip_safe=False,
     maintainer="drill_sim developers",

@@ -94,3 +94,21 @@ def test_bad_arguments_exit_2_with_one_clear_line(args, fragment):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and fragment in lines[0], proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_main_job_runs_node_and_driver_and_writes_summary_and_plot(tmp_path):
+    from rosutil import isolate
+    isolate()
+    png = tmp_path / "run.png"
+    proc = subprocess.run([installed("drill_sim"), "run", "--scenario", "step_test",
+                           "--duration", "12", "--plot", str(png)], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "hole drilled" in proc.stdout and "stick fraction" in proc.stdout
+    assert "rpm" in proc.stdout and "WOB" in proc.stdout          # the live status lines
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_main_job_bad_arguments():
+    proc = run("run", "--scenario", "nowhere", check=False)
+    assert proc.returncode == 2 and "scenario" in proc.stderr and "Traceback" not in proc.stderr

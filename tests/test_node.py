@@ -212,3 +212,30 @@ def test_sim_time_mode_publishes_clock_ten_times_faster(ros):
         assert rate == pytest.approx(10.0, rel=0.1)
         assert stamps[-1] == pytest.approx(wall[-1, 1], abs=0.05)     # stamps follow /clock
         assert stamps[-1] < 60.0                                      # sim time from zero
+
+
+def test_sigterm_shuts_down_cleanly(ros):
+    import signal
+    proc = NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/term")
+    seen: list[float] = []
+    sub = ros.create_subscription(Bool, "/term/drill_sim/bit/stick_slip",
+                                  lambda m: seen.append(1.0), 10)
+    wait_for(lambda: len(seen) > 5, ros, 30.0, "the namespaced rig's outputs")
+    proc.proc.send_signal(signal.SIGTERM)
+    code = proc.proc.wait(timeout=20)
+    out = proc.proc.stdout.read()
+    ros.destroy_subscription(sub)
+    assert code == 0 and "Traceback" not in out and "shut down" in out, out
+
+
+def test_driver_plays_a_scenario_onto_the_rig(ros, base):
+    """drill_sim_drive against its own namespaced rig: commanded speed follows the scenario."""
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/drive", "-p",
+                     "real_time_factor:=1.0"), \
+            NodeProcess("drill_sim_drive", "step_test", "--ros-args", "-r", "__ns:=/drive"):
+        speeds: list[float] = []
+        ros.create_subscription(JointState, "/drive/drill_sim/joint_states",
+                                lambda m: speeds.append(m.velocity[0]), 100)
+        wait_for(lambda: len(speeds) > 100, ros, 30.0, "the driven rig's joint states")
+        wait_for(lambda: speeds[-1] == pytest.approx(120 * RPM), ros, 30.0,
+                 "the scenario's 120 rpm step at 10 s")

@@ -350,28 +350,29 @@ def _read_only(description: str) -> ParameterDescriptor:
 
 def main(args: list[str] | None = None) -> int:
     rclpy.init(args=args)
+    node = executor = None
     try:
         node = RigNode()
-    except SystemExit as exc:
-        print(exc, file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    executor = EventsExecutor()
-    executor.add_node(node)
-    node.rig.sim.advance(0)       # load the compiled kernel before the first tick is due
-    try:
+        executor = EventsExecutor()
+        executor.add_node(node)
+        node.rig.sim.advance(0)   # load the compiled kernel before the first tick is due
         # EventsExecutor.spin() does not dispatch timers in this rclpy; spin_once() does, at
         # 1 kHz with p99 period ~1.08 ms and a fifth of the CPU of SingleThreadedExecutor.
         while rclpy.ok():
             executor.spin_once(timeout_sec=0.0 if node.max_speed else 0.1)
             if node.max_speed:
                 node.tick()
+    except SystemExit as exc:     # a bad parameter at start-up: one clear line
+        print(exc, file=sys.stderr)
+        return 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        print(f"drill_sim_node: shut down at t = {node.sim_time_s:.3f} s", file=sys.stderr)
-        executor.shutdown()
-        node.destroy_node()
+        if node is not None:
+            print(f"drill_sim_node: shut down at t = {node.sim_time_s:.3f} s", file=sys.stderr)
+            if executor is not None:
+                executor.shutdown()
+            node.destroy_node()
         rclpy.try_shutdown()
     return 0
 

@@ -1,0 +1,56 @@
+"""The package builds with colcon and its executables are where ``ros2 run`` looks for them."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from conftest import installed
+from rosutil import isolate
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_colcon_build_and_ros2_run_lookup(tmp_path):
+    src = tmp_path / "src" / "drill_sim"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
+        ".venv", ".git", "build", "install", "log", "__pycache__", "*.egg-info", ".*cache"))
+    build = subprocess.run([installed("colcon"), "build", "--base-paths", "src"], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=600)
+    assert build.returncode == 0, build.stdout + build.stderr
+    prefix = tmp_path / "install" / "drill_sim"
+    env = dict(os.environ, AMENT_PREFIX_PATH=str(prefix))
+    # ros2 run: get_package_prefix(pkg) + lib/<pkg>/ + an executable file
+    probe = ("from ament_index_python.packages import get_package_prefix as g;"
+             "print(g('drill_sim'))")
+    found = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True,
+                           text=True, check=True).stdout.strip()
+    assert Path(found) == prefix
+    exe = Path(found) / "lib" / "drill_sim" / "drill_sim_node"
+    assert exe.is_file() and os.access(exe, os.X_OK)
+    assert (Path(found) / "lib" / "drill_sim" / "drill_sim_drive").is_file()
+    assert (prefix / "share" / "drill_sim" / "package.xml").is_file()
+    assert (prefix / "share" / "drill_sim" / "config" / "drill_sim.yaml").is_file()
+    # run it the way ros2 run would, from the install space
+    isolate()
+    site = next((prefix / "lib").glob("python3*/site-packages"))
+    env["PYTHONPATH"] = os.pathsep.join([str(site), env.get("PYTHONPATH", "")])
+    proc = subprocess.Popen([str(exe), "--ros-args", "--params-file",
+                             str(prefix / "share" / "drill_sim" / "config" / "drill_sim.yaml")],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            cwd=tmp_path)
+    lines = []
+    end = time.monotonic() + 60
+    while time.monotonic() < end:
+        line = proc.stdout.readline()
+        lines.append(line)
+        if "ready" in line or not line:
+            break
+    proc.send_signal(2)
+    rest, _ = proc.communicate(timeout=20)
+    assert any("rig 'base' ready" in line for line in lines), "".join(lines) + rest
+    assert proc.returncode == 0, "".join(lines) + rest
