@@ -38,6 +38,7 @@ def test_random_parameters_and_commands(groups, commands, start_steady, gap):
         assert np.all(tr.omega[~tr.off_bottom] >= 0.0)      # no backward rotation in contact
         assert np.all(tr.w >= 0.0)                          # the rock only pushes
         assert np.all(sim.surface >= before)                # the hole never fills in
+        assert sim.hole_bottom == pytest.approx(max(sim.surface.max(), 0.0))
         assert np.all(tr.v[tr.stuck & (tr.w > 0)] == 0.0)   # a stuck bit resting on rock is still
     assert id(sim._surf) == surface_id and sim._surf.size == size
 

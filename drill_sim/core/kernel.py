@@ -30,7 +30,8 @@ X_W, X_T = 8, 9     # weight and torque on bit during the last step [F*], [C]
 X_TS = 10           # string torque phi_td - phi at the end of the last step [C]
 X_DELTA = 11        # depth of cut per blade during the last step [L*]
 X_G = 12            # wear-flat contact factor during the last step [-]
-NX = 13
+X_HOLE = 13         # deepest point of the rock surface, max of S [L*]
+NX = 14
 
 # integer state k
 K_LAST = 0          # absolute index of the last surface node the blades passed
@@ -104,6 +105,7 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     om = x[X_OMEGA]
     ptd = x[X_PHI_TD]
     s_behind = x[X_S_BEHIND]
+    hole = x[X_HOLE]
     since_stick = x[X_SINCE_STICK]
     k_last = k[K_LAST]
     regime = k[K_REGIME]
@@ -217,6 +219,8 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
                 old = surf[j]
                 if uc > old:
                     surf[j] = uc
+                    if uc > hole:
+                        hole = uc
                 s_behind = old
             k_last = k_new
         elif k_new < k_last:
@@ -281,6 +285,7 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     x[X_OMEGA] = om
     x[X_PHI_TD] = ptd
     x[X_S_BEHIND] = s_behind
+    x[X_HOLE] = hole
     x[X_SINCE_STICK] = since_stick
     x[X_W] = w
     x[X_T] = t

@@ -129,7 +129,7 @@ class Simulator:
         theta = np.arange(nodes) * dtheta
         self._surf[:] = st.v0 * (theta - 2.0 * math.pi / self.groups.n) / st.omega0
         self._surf[0] = 0.0
-        self._x[:] = 0.0
+        self._x[:] = 0.0                       # X_HOLE = 0: the deepest point is under the bit
         self._x[kn.X_V] = st.v0
         self._x[kn.X_OMEGA] = st.omega0 * (1.0 + perturbation)
         self._x[kn.X_PHI_TD] = st.t0
@@ -171,6 +171,7 @@ class Simulator:
         x = self._x
         x[kn.X_TAU], x[kn.X_U], x[kn.X_V], x[kn.X_PHI], x[kn.X_OMEGA], x[kn.X_PHI_TD] = values[:6]
         x[kn.X_SINCE_STICK] = since_stick
+        x[kn.X_HOLE] = float(self._surf.max())
         x[kn.X_TS] = phi_td - phi
         x[kn.X_W], x[kn.X_T], x[kn.X_DELTA], x[kn.X_G] = w, t, delta_n, g
         x[kn.X_S_BEHIND] = self._surf[k_last & (nodes - 1)]
@@ -257,7 +258,7 @@ class Simulator:
     @property
     def hole_bottom(self) -> float:
         """Deepest point of the rock surface [L*], positive downhole."""
-        return float(self._surf.max())
+        return float(self._x[kn.X_HOLE])
 
     @property
     def surface(self) -> np.ndarray:

@@ -1,0 +1,145 @@
+"""Speed of the rig node (issue targets in brackets), each from a second process:
+
+  - at 1000 Hz with every output published and one external subscriber, over --seconds:
+    achieved rate [>= 99.5 % of nominal], p99 period between received samples [<= 1.2 ms],
+    CPU of the node process [<= 40 % of one core];
+  - command-to-response latency: a top-drive command published -> the first joint_states
+    sample carrying it received back [p50 <= 1.5 ms, p99 <= 3 ms];
+  - max_speed with publish_clock: simulated seconds per wall second [>= 20].
+
+Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import TwistStamped
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+
+BIN = Path(sys.executable).parent
+
+
+def cpu_seconds(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def start(*args: str) -> subprocess.Popen:
+    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *args],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def spin(node, seconds: float) -> None:
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.001)
+
+
+def rate_and_cpu(node, seconds: float) -> None:
+    proc = start("-r", "__ns:=/bench")
+    arrivals: list[float] = []
+    p99s: list[float] = []
+    node.create_subscription(JointState, "/bench/drill_sim/joint_states",
+                             lambda m: arrivals.append(time.perf_counter()), 1000)
+    node.create_subscription(DiagnosticArray, "/diagnostics", lambda m: p99s.extend(
+        float(kv.value) for kv in m.status[0].values if kv.key == "tick_period_p99_ms"), 10)
+    end = time.monotonic() + 60
+    while len(arrivals) < 2000 and time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.01)
+    arrivals.clear()
+    p99s.clear()
+    cpu0, wall0 = cpu_seconds(proc.pid), time.monotonic()
+    spin(node, seconds)
+    cpu = (cpu_seconds(proc.pid) - cpu0) / (time.monotonic() - wall0)
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=20)
+    t = np.array(arrivals)
+    periods = np.diff(t) * 1e3
+    rate = (len(t) - 1) / (t[-1] - t[0])
+    print(f"1000 Hz, all outputs, one external subscriber, {seconds:g} s: achieved "
+          f"{rate:.1f} Hz ({100 * rate / 1000:.2f} %), received period p50 "
+          f"{np.percentile(periods, 50):.3f} ms, p99 {np.percentile(periods, 99):.3f} ms; "
+          f"tick period p99 in the node (worst 1 s window) {max(p99s):.3f} ms; "
+          f"node CPU {100 * cpu:.1f} % of one core")
+
+
+def latency(node, samples: int = 2000) -> None:
+    proc = start("-r", "__ns:=/lat")
+    pub = node.create_publisher(TwistStamped, "/lat/drill_sim/cmd/top_drive", 10)
+    state = {"value": None, "sent": 0.0}
+    lat: list[float] = []
+
+    def on_joints(m: JointState) -> None:
+        if state["value"] is not None and m.velocity[0] == state["value"]:
+            lat.append(time.perf_counter() - state["sent"])
+            state["value"] = None
+
+    node.create_subscription(JointState, "/lat/drill_sim/joint_states", on_joints, 1000)
+    while pub.get_subscription_count() == 0:
+        rclpy.spin_once(node, timeout_sec=0.01)
+    spin(node, 1.0)
+    msg = TwistStamped()
+    msg.header.frame_id = "top_drive"
+    for i in range(samples):
+        value = 6.0 + 0.001 * (i % 100)
+        msg.twist.angular.z = value
+        state["value"], state["sent"] = value, time.perf_counter()
+        pub.publish(msg)
+        end = time.monotonic() + 0.5
+        while state["value"] is not None and time.monotonic() < end:
+            rclpy.spin_once(node, timeout_sec=0.0005)
+        spin(node, 0.002 + 0.0007 * (i % 3))            # vary the phase against the tick
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=20)
+    ms = np.array(lat) * 1e3
+    print(f"command-to-response latency over {len(ms)} commands: p50 {np.percentile(ms, 50):.3f}"
+          f" ms, p99 {np.percentile(ms, 99):.3f} ms")
+
+
+def max_speed(node, rate_hz: float, seconds: float = 10.0) -> None:
+    proc = start("-r", "__ns:=/max", "-p", "publish_clock:=true", "-p", "max_speed:=true",
+                 "-p", f"rate_hz:={rate_hz}")
+    clocks: list[tuple[float, float]] = []
+    node.create_subscription(Clock, "/clock", lambda m: clocks.append(
+        (time.monotonic(), m.clock.sec + 1e-9 * m.clock.nanosec)), 1000)
+    while len(clocks) < 100:
+        rclpy.spin_once(node, timeout_sec=0.01)
+    clocks.clear()
+    spin(node, seconds)
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=20)
+    c = np.array(clocks)
+    speedup = (c[-1, 1] - c[0, 1]) / (c[-1, 0] - c[0, 0])
+    print(f"max_speed with /clock, all topics every tick of {1e3 / rate_hz:g} ms simulated "
+          f"(rate_hz {rate_hz:g}): {speedup:.1f} x real time")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--seconds", type=float, default=30.0)
+    args = parser.parse_args()
+    os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    rclpy.init()
+    node = rclpy.create_node("drill_sim_bench")
+    rate_and_cpu(node, args.seconds)
+    latency(node)
+    max_speed(node, 1000.0)
+    max_speed(node, 100.0)
+    node.destroy_node()
+    rclpy.shutdown()
+
+
+if __name__ == "__main__":
+    main()
