@@ -239,3 +239,21 @@ def test_driver_plays_a_scenario_onto_the_rig(ros, base):
         wait_for(lambda: len(speeds) > 100, ros, 30.0, "the driven rig's joint states")
         wait_for(lambda: speeds[-1] == pytest.approx(120 * RPM), ros, 30.0,
                  "the scenario's 120 rpm step at 10 s")
+
+
+def test_stale_commands_are_reported_on_diagnostics(ros):
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/stale", "-r",
+                     "__node:=stale_rig", "-p", "command_timeout_s:=0.2"):
+        seen: list = []
+        sub = ros.create_subscription(DiagnosticArray, "/diagnostics", lambda m: seen.extend(
+            s for s in m.status if s.name.startswith("stale_rig")), 10)
+        wait_for(lambda: any(s.level == DiagnosticStatus.WARN for s in seen), ros, 30.0,
+                 "a WARN status from the rig that got no command")
+        warn = next(s for s in seen if s.level == DiagnosticStatus.WARN)
+        values = {kv.key: kv.value for kv in warn.values}
+        ros.destroy_subscription(sub)
+    assert "no command" in warn.message
+    assert float(values["command_age_s"]) > 0.2
+    assert {"tick_rate_hz", "tick_period_p99_ms", "overruns", "real_time_factor", "regime",
+            "ssi"} <= set(values)
