@@ -210,7 +210,8 @@ def test_sim_time_mode_publishes_clock_ten_times_faster(ros):
         wall = np.array(clocks)
         rate = (wall[-1, 1] - wall[0, 1]) / (wall[-1, 0] - wall[0, 0])
         assert rate == pytest.approx(10.0, rel=0.1)
-        assert stamps[-1] == pytest.approx(wall[-1, 1], abs=0.05)     # stamps follow /clock
+        published = {round(c, 9) for c in wall[:, 1]}
+        assert all(round(s, 9) in published for s in stamps[-200:])   # stamps are /clock times
         assert stamps[-1] < 60.0                                      # sim time from zero
 
 

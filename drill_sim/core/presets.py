@@ -9,12 +9,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from importlib import resources
 from pathlib import Path
 
-import yaml
-
 from .parameters import ParameterError, RigParameters, StringGeometry, check_number
+from .resources import read_yaml, shipped_names
 
 _BIT_KEYS = ("bit_radius_m", "blade_count", "intrinsic_specific_energy_pa", "cutting_inclination",
              "contact_stress_pa", "wear_flat_length_m", "friction_coefficient",
@@ -46,27 +44,12 @@ class Preset:
 
 def preset_names() -> list[str]:
     """Names of the presets shipped with the package."""
-    folder = resources.files("drill_sim") / "presets"
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
+    return shipped_names("presets")
 
 
 def load_preset(name_or_path: str | Path) -> Preset:
     """Load a shipped preset by name (``base``, ``shallow``, ``deep``) or any preset YAML file."""
-    text_name = str(name_or_path)
-    if text_name in preset_names():
-        source = resources.files("drill_sim") / "presets" / f"{text_name}.yaml"
-        text, name = source.read_text(encoding="utf-8"), text_name
-    else:
-        path = Path(text_name)
-        if not path.is_file():
-            raise ParameterError(f"preset {text_name!r} is neither a shipped preset "
-                                 f"({', '.join(preset_names())}) nor a readable YAML file")
-        text, name = path.read_text(encoding="utf-8"), path.stem
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ParameterError(f"preset {text_name!r} is not valid YAML: {exc}") from None
-    return preset_from_dict(name, data)
+    return preset_from_dict(*read_yaml("preset", "presets", name_or_path))
 
 
 def preset_from_dict(name: str, data: object) -> Preset:

@@ -12,12 +12,10 @@ from __future__ import annotations
 import math
 from bisect import bisect_right
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 
-import yaml
-
 from .parameters import ParameterError, check_number
+from .resources import read_yaml, shipped_names
 from .rig import RPM
 
 _KEYS = {"at_s", "rpm", "top_drive_speed_rad_s", "wob_kn", "hook_load_kn", "ramp"}
@@ -62,27 +60,12 @@ def _value(points: tuple[_Point, ...], t: float, value) -> float:
 
 
 def scenario_names() -> list[str]:
-    folder = resources.files("drill_sim") / "scenarios"
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
+    return shipped_names("scenarios")
 
 
 def load_scenario(name_or_path: str | Path) -> Scenario:
     """A shipped scenario by name (``tag_bottom``, ``step_test``) or any scenario YAML file."""
-    text_name = str(name_or_path)
-    if text_name in scenario_names():
-        text = (resources.files("drill_sim") / "scenarios" / f"{text_name}.yaml").read_text()
-        name = text_name
-    else:
-        path = Path(text_name)
-        if not path.is_file():
-            raise ParameterError(f"scenario {text_name!r} is neither a shipped scenario "
-                                 f"({', '.join(scenario_names())}) nor a readable YAML file")
-        text, name = path.read_text(encoding="utf-8"), path.stem
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ParameterError(f"scenario {text_name!r} is not valid YAML: {exc}") from None
-    return scenario_from_dict(name, data)
+    return scenario_from_dict(*read_yaml("scenario", "scenarios", name_or_path))
 
 
 def scenario_from_dict(name: str, data: object) -> Scenario:

@@ -18,6 +18,7 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -29,6 +30,7 @@ from ..core.rig import RigSample
 from . import interface as itf
 from .parameters import MODEL_UNITS, rig_parameters, specs
 
+RCLError = _rclpy.RCLError       # what rcl raises, e.g. publishing once a signal shut down
 REGIME_NAMES = {True: "stick-slip", False: "drilling"}
 
 
@@ -139,13 +141,20 @@ class RigNode(Node):
         self._last_tick = now
         if self.paused:
             return
+        if not self.context.ok():                  # shutting down (Ctrl-C, SIGTERM)
+            return
         target = self.sim_target()
         # never try to catch up more than 0.1 s of simulated time in one tick
         self.rig.advance_to(min(target, self.rig.time_s + 0.1 * self.p["real_time_factor"]
                                 + 1.0 / self.p["rate_hz"]))
         if target - self.rig.time_s > 0.1 * self.p["real_time_factor"]:
             self._anchor()                         # fell behind: drop the backlog
-        self.publish_sample(self.rig.sample())
+        try:
+            self.publish_sample(self.rig.sample())
+        except RCLError:
+            if self.context.ok():
+                raise                              # a real failure, not a shutdown race
+            return
         self._tick_count += 1
 
     def publish_sample(self, s: RigSample) -> None:
@@ -182,35 +191,28 @@ class RigNode(Node):
         self.get_logger().warning(f"refused {what} = {value!r}: expected {expected}; holding "
                                   "the last valid command", throttle_duration_sec=1.0)
 
-    def _check_frame(self, topic: str, frame: str) -> bool:
-        if frame in itf.COMMAND_FRAMES:
-            return True
-        self._refuse(f"{topic} frame_id", frame, "'top_drive' or empty")
-        return False
+    def _accepted(self, msg, value: float, what: str, limit: str, unit: str) -> bool:
+        """A command is used only if its frame is expected and its value finite and in range."""
+        if msg.header.frame_id not in itf.COMMAND_FRAMES:
+            self._refuse(f"{what} frame_id", msg.header.frame_id, "'top_drive' or empty")
+            return False
+        high = self.p[limit]
+        if not (math.isfinite(value) and 0.0 <= value <= high):
+            self._refuse(f"{what} [{unit}]", value, f"a finite value in [0, {high:g}] {unit}")
+            return False
+        self._cmd_wall = time.monotonic()
+        return True
 
     def _on_top_drive(self, msg: TwistStamped) -> None:
-        if not self._check_frame("top-drive command", msg.header.frame_id):
-            return
         value = msg.twist.angular.z
-        high = self.p["max_top_drive_speed_rad_s"]
-        if not (math.isfinite(value) and 0.0 <= value <= high):
-            self._refuse("top-drive speed twist.angular.z [rad/s]", value,
-                         f"a finite speed in [0, {high:g}] rad/s")
-            return
-        self.rig.command(value, self.rig.commanded_hook_load_n)
-        self._cmd_wall = time.monotonic()
+        if self._accepted(msg, value, "top-drive speed twist.angular.z",
+                          "max_top_drive_speed_rad_s", "rad/s"):
+            self.rig.command(value, self.rig.commanded_hook_load_n)
 
     def _on_hook_load(self, msg: WrenchStamped) -> None:
-        if not self._check_frame("hook-load command", msg.header.frame_id):
-            return
         value = msg.wrench.force.z
-        high = self.p["max_hook_load_n"]
-        if not (math.isfinite(value) and 0.0 <= value <= high):
-            self._refuse("hook load wrench.force.z [N]", value,
-                         f"a finite force in [0, {high:g}] N")
-            return
-        self.rig.command(self.rig.commanded_speed_rad_s, value)
-        self._cmd_wall = time.monotonic()
+        if self._accepted(msg, value, "hook load wrench.force.z", "max_hook_load_n", "N"):
+            self.rig.command(self.rig.commanded_speed_rad_s, value)
 
     # ---- services ----------------------------------------------------------------------
     def _start_initial(self) -> None:
@@ -386,6 +388,9 @@ def main(args: list[str] | None = None) -> int:
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except RCLError:
+        if rclpy.ok():
+            raise                 # only a failure raced by a signal's shutdown is expected
     finally:
         if node is not None:
             print(f"drill_sim_node: shut down at t = {node.sim_time_s:.3f} s", file=sys.stderr)

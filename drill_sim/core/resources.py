@@ -1,0 +1,35 @@
+"""YAML files shipped in a package folder (presets, scenarios), or given by path."""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+import yaml
+
+from .parameters import ParameterError
+
+
+def shipped_names(folder: str) -> list[str]:
+    """Names (without .yaml) of the files shipped in ``drill_sim/<folder>/``."""
+    root = resources.files("drill_sim") / folder
+    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".yaml"))
+
+
+def read_yaml(kind: str, folder: str, name_or_path: str | Path) -> tuple[str, object]:
+    """(name, parsed YAML) of a shipped file by name or of any YAML file; ParameterError if
+    neither exists or the text is not YAML."""
+    text_name = str(name_or_path)
+    if text_name in shipped_names(folder):
+        source = resources.files("drill_sim") / folder / f"{text_name}.yaml"
+        text, name = source.read_text(encoding="utf-8"), text_name
+    else:
+        path = Path(text_name)
+        if not path.is_file():
+            raise ParameterError(f"{kind} {text_name!r} is neither a shipped {kind} "
+                                 f"({', '.join(shipped_names(folder))}) nor a readable YAML file")
+        text, name = path.read_text(encoding="utf-8"), path.stem
+    try:
+        return name, yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ParameterError(f"{kind} {text_name!r} is not valid YAML: {exc}") from None
