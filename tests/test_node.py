@@ -10,7 +10,6 @@ import rclpy
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
-from rosgraph_msgs.msg import Clock
 from rosutil import NodeProcess, isolate, spin_for, wait_for
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
@@ -184,77 +183,3 @@ def test_bad_parameters_are_refused_good_ones_applied(client):
     assert applied.successful, applied.reason
     data = client.window(0.5)
     assert np.all(np.isfinite(data)) and data.shape[0] > 50
-
-
-def test_bad_startup_parameter_exits_with_a_clear_message(ros):
-    proc = NodeProcess("drill_sim_node", "--ros-args", "-p", "initial_state:=sideways")
-    code = proc.proc.wait(timeout=30)
-    out = proc.proc.stdout.read()
-    assert code == 2 and "initial_state" in out and "Traceback" not in out
-
-
-def test_sim_time_mode_publishes_clock_ten_times_faster(ros):
-    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/fast", "-p",
-                     "publish_clock:=true", "-p", "real_time_factor:=10.0"):
-        clocks: list[tuple[float, float]] = []
-        stamps: list[float] = []
-        ros.create_subscription(
-            Clock, "/clock", lambda m: clocks.append(
-                (rclpy.clock.Clock().now().nanoseconds * 1e-9,
-                 m.clock.sec + 1e-9 * m.clock.nanosec)), 100)
-        ros.create_subscription(
-            WrenchStamped, "/fast/drill_sim/bit/wrench",
-            lambda m: stamps.append(m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec), 100)
-        wait_for(lambda: len(clocks) > 10 and len(stamps) > 10, ros, 30.0, "/clock and outputs")
-        spin_for(ros, 2.0)
-        wall = np.array(clocks)
-        rate = (wall[-1, 1] - wall[0, 1]) / (wall[-1, 0] - wall[0, 0])
-        assert rate == pytest.approx(10.0, rel=0.1)
-        published = {round(c, 9) for c in wall[:, 1]}
-        assert all(round(s, 9) in published for s in stamps[-200:])   # stamps are /clock times
-        assert stamps[-1] < 60.0                                      # sim time from zero
-
-
-def test_sigterm_shuts_down_cleanly(ros):
-    import signal
-    proc = NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/term")
-    seen: list[float] = []
-    sub = ros.create_subscription(Bool, "/term/drill_sim/bit/stick_slip",
-                                  lambda m: seen.append(1.0), 10)
-    wait_for(lambda: len(seen) > 5, ros, 30.0, "the namespaced rig's outputs")
-    proc.proc.send_signal(signal.SIGTERM)
-    code = proc.proc.wait(timeout=20)
-    out = proc.proc.stdout.read()
-    ros.destroy_subscription(sub)
-    assert code == 0 and "Traceback" not in out and "shut down" in out, out
-
-
-def test_driver_plays_a_scenario_onto_the_rig(ros, base):
-    """drill_sim_drive against its own namespaced rig: commanded speed follows the scenario."""
-    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/drive", "-p",
-                     "real_time_factor:=1.0"), \
-            NodeProcess("drill_sim_drive", "step_test", "--ros-args", "-r", "__ns:=/drive"):
-        speeds: list[float] = []
-        ros.create_subscription(JointState, "/drive/drill_sim/joint_states",
-                                lambda m: speeds.append(m.velocity[0]), 100)
-        wait_for(lambda: len(speeds) > 100, ros, 30.0, "the driven rig's joint states")
-        wait_for(lambda: speeds[-1] == pytest.approx(120 * RPM), ros, 30.0,
-                 "the scenario's 120 rpm step at 10 s")
-
-
-def test_stale_commands_are_reported_on_diagnostics(ros):
-    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/stale", "-r",
-                     "__node:=stale_rig", "-p", "command_timeout_s:=0.2"):
-        seen: list = []
-        sub = ros.create_subscription(DiagnosticArray, "/diagnostics", lambda m: seen.extend(
-            s for s in m.status if s.name.startswith("stale_rig")), 10)
-        wait_for(lambda: any(s.level == DiagnosticStatus.WARN for s in seen), ros, 30.0,
-                 "a WARN status from the rig that got no command")
-        warn = next(s for s in seen if s.level == DiagnosticStatus.WARN)
-        values = {kv.key: kv.value for kv in warn.values}
-        ros.destroy_subscription(sub)
-    assert "no command" in warn.message
-    assert float(values["command_age_s"]) > 0.2
-    assert {"tick_rate_hz", "tick_period_p99_ms", "overruns", "real_time_factor", "regime",
-            "ssi"} <= set(values)

@@ -74,3 +74,14 @@ def test_hook_load_above_string_weight_lifts_the_bit_at_the_hoisting_limit(base)
     rig.advance(20.0)
     s = rig.sample()
     assert not s.off_bottom and s.wob_n > 0           # back down on the rock
+
+
+def test_failed_steady_start_changes_nothing(base):
+    from drill_sim.core import NoSteadyDrilling
+    rig = Rig(base.rig)
+    rig.start_steady(base.top_drive_speed_rad_s, base.hook_load_n)
+    rig.advance(1.0)
+    before = (rig.sample(), rig.sim.commands)
+    with pytest.raises(NoSteadyDrilling):
+        rig.start_steady(1.0, base.rig.submerged_weight_n - 10e3)     # 10 kN < friction weight
+    assert (rig.sample(), rig.sim.commands) == before

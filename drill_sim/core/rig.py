@@ -129,7 +129,10 @@ class Rig:
 
     def start_steady(self, top_drive_speed_rad_s: float, hook_load_n: float,
                      perturbation: float = 0.0) -> None:
-        """Start exactly on steady drilling at these commands (bit speed times 1 + perturbation)."""
+        """Start exactly on steady drilling at these commands (bit speed times 1 + perturbation).
+
+        Raises NoSteadyDrilling, changing nothing, when the weight cannot beat friction."""
+        self.steady_state(top_drive_speed_rad_s, hook_load_n)
         self.command(top_drive_speed_rad_s, hook_load_n)
         self.sim.start_steady(self.w0_of(hook_load_n), self.omega0_of(top_drive_speed_rad_s),
                               perturbation)
