@@ -29,7 +29,8 @@ setup(
         "matplotlib>=3.8",
     ],
     extras_require={
-        "test": ["pytest>=8", "hypothesis>=6.100", "ruff>=0.6", "colcon-common-extensions>=0.3"],
+        "test": ["pytest>=8", "hypothesis>=6.100", "ruff>=0.6", "colcon-common-extensions>=0.3",
+                 "rosbags>=0.10", "mcap-ros2-support>=0.5"],
     },
     zip_safe=False,
     maintainer="drill_sim developers",

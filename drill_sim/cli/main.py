@@ -31,6 +31,7 @@ from ..core import (
     steady_state,
 )
 from ..core.simulator import DEFAULT_DT, Trajectory
+from . import bag as bag_cli
 from .errors import UsageError
 from .plot import plot_time_series
 from .progress import Progress
@@ -105,6 +106,8 @@ def build_parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="the main job: rig node + scenario driver, live status, "
                                      "summary and plot")
     add_arguments(run)
+
+    bag_cli.add_arguments(sub)
 
     stab = sub.add_parser("stability", help="steady drilling and the rightmost roots of Delta(s)")
     model_args(stab)
@@ -391,6 +394,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
         if args.command == "run":
             return run_session(args)
+        if args.command == "bag":
+            return bag_cli.run(args)
         return {"simulate": cmd_simulate, "stability": cmd_stability}[args.command](args)
     except (UsageError, ParameterError) as exc:
         print(f"drill_sim: error: {exc}", file=sys.stderr)

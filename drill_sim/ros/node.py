@@ -8,6 +8,7 @@ until the next tick; a refused command never reaches the model.
 from __future__ import annotations
 
 import math
+import signal
 import sys
 import time
 
@@ -16,21 +17,21 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64
 from std_srvs.srv import SetBool, Trigger
 
+from ..bag.writer import BagError
 from ..core import NoSteadyDrilling, ParameterError, Rig, load_preset
 from ..core.rig import RigSample
 from . import interface as itf
 from .parameters import MODEL_UNITS, rig_parameters, specs
+from .recorder import SessionRecorder
 
-RCLError = _rclpy.RCLError       # what rcl raises, e.g. publishing once a signal shut down
 REGIME_NAMES = {True: "stick-slip", False: "drilling"}
 
 
@@ -75,13 +76,25 @@ class RigNode(Node):
         self.pub_diag = self.create_publisher(DiagnosticArray, itf.DIAGNOSTICS, 10)
         self.pub_clock = self.create_publisher(Clock, itf.CLOCK, 10) \
             if self.p["publish_clock"] else None
-        self.create_subscription(TwistStamped, itf.CMD_TOP_DRIVE, self._on_top_drive, q)
-        self.create_subscription(WrenchStamped, itf.CMD_HOOK_LOAD, self._on_hook_load, q)
+        self.sub_top_drive = self.create_subscription(TwistStamped, itf.CMD_TOP_DRIVE,
+                                                      self._on_top_drive, q)
+        self.sub_hook_load = self.create_subscription(WrenchStamped, itf.CMD_HOOK_LOAD,
+                                                      self._on_hook_load, q)
         self.create_service(Trigger, itf.SRV_RESET, self._on_reset)
         self.create_service(SetBool, itf.SRV_PAUSE, self._on_pause)
         self.create_service(Trigger, itf.SRV_STEP, self._on_step)
 
         self._msgs = _Messages()
+        self._record_error: str | None = None
+        m = self._msgs
+        self._outputs = [(self.pub_bit_wrench, m.bit_wrench), (self.pub_bit_twist, m.bit_twist),
+                         (self.pub_flag, m.flag), (self.pub_td_wrench, m.td_wrench),
+                         (self.pub_doc, m.doc), (self.pub_hole, m.hole),
+                         (self.pub_joints, m.joints)]
+        if self.pub_clock is not None:
+            self._outputs.insert(0, (self.pub_clock, m.clock))
+        self._output_names = [pub.topic_name for pub, _ in self._outputs]
+        self.recorder = self._start_recorder() if self.p["record"] else None
         self._offset_s = 0.0                     # simulated time before the last reset
         self.paused = False
         self._epoch_ns = time.time_ns()          # stamps = epoch + sim time without /clock
@@ -141,20 +154,13 @@ class RigNode(Node):
         self._last_tick = now
         if self.paused:
             return
-        if not self.context.ok():                  # shutting down (Ctrl-C, SIGTERM)
-            return
         target = self.sim_target()
         # never try to catch up more than 0.1 s of simulated time in one tick
         self.rig.advance_to(min(target, self.rig.time_s + 0.1 * self.p["real_time_factor"]
                                 + 1.0 / self.p["rate_hz"]))
         if target - self.rig.time_s > 0.1 * self.p["real_time_factor"]:
             self._anchor()                         # fell behind: drop the backlog
-        try:
-            self.publish_sample(self.rig.sample())
-        except RCLError:
-            if self.context.ok():
-                raise                              # a real failure, not a shutdown race
-            return
+        self.publish_sample(self.rig.sample())
         self._tick_count += 1
 
     def publish_sample(self, s: RigSample) -> None:
@@ -175,16 +181,45 @@ class RigNode(Node):
         m.joints.position = [s.top_drive_angle_rad, s.bit_depth_m, s.bit_angle_rad, s.hole_depth_m]
         m.joints.velocity = [s.top_drive_speed_rad_s, s.rop_m_s, s.bit_speed_rad_s, s.rop_m_s]
         m.joints.effort = [s.surface_torque_nm, s.hook_load_n, s.tob_nm, s.wob_n]
-        if self.pub_clock is not None:
-            m.clock.clock = m.bit_wrench.header.stamp
-            self.pub_clock.publish(m.clock)
-        self.pub_bit_wrench.publish(m.bit_wrench)
-        self.pub_bit_twist.publish(m.bit_twist)
-        self.pub_flag.publish(m.flag)
-        self.pub_td_wrench.publish(m.td_wrench)
-        self.pub_doc.publish(m.doc)
-        self.pub_hole.publish(m.hole)
-        self.pub_joints.publish(m.joints)
+        m.clock.clock = m.bit_wrench.header.stamp
+        for pub, msg in self._outputs:
+            pub.publish(msg)
+        if self.recorder is not None:
+            now = time.time_ns()
+            for name, (_, msg) in zip(self._output_names, self._outputs, strict=True):
+                self.recorder.record(name, msg, now, now)
+
+    def _start_recorder(self) -> SessionRecorder | None:
+        topics = {pub.topic_name: (_type_name(msg), self.p["qos_reliability"])
+                  for pub, msg in self._outputs}
+        topics[self.sub_top_drive.topic_name] = ("geometry_msgs/msg/TwistStamped", "")
+        topics[self.sub_hook_load.topic_name] = ("geometry_msgs/msg/WrenchStamped", "")
+        g, sc = self.rig.groups, self.rig.scales
+        context = {
+            "parameters": {k: str(v) for k, v in sorted(self.p.items())},
+            "groups": {"n": str(g.n), "psi": repr(g.psi), "lambda": repr(g.lam),
+                       "beta": repr(g.beta)},
+            "scales": {"time_s": repr(sc.time_s), "length_m": repr(sc.length_m),
+                       "force_n": repr(sc.force_n),
+                       "stiffness_nm_per_rad": repr(sc.stiffness_nm_per_rad)},
+        }
+        context["session"] = {"preset": self.preset.name, "node": self.get_fully_qualified_name()}
+        try:
+            rec = SessionRecorder(self.p["record"], topics,
+                                  reliability=self.p["qos_reliability"], context=context,
+                                  logger=self.get_logger())
+        except (OSError, BagError) as exc:
+            self.get_logger().error(f"not recording: {exc}; the simulation runs on")
+            self._record_error = f"not recording: {exc}"
+            return None
+        self.get_logger().info(f"recording to {self.p['record']}")
+        return rec
+
+    def _record_command(self, sub, msg) -> None:
+        if self.recorder is not None:
+            now = time.time_ns()
+            self.recorder.record(sub.topic_name, msg, now,
+                                 msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec)
 
     # ---- commands ----------------------------------------------------------------------
     def _refuse(self, what: str, value: object, expected: str) -> None:
@@ -204,12 +239,14 @@ class RigNode(Node):
         return True
 
     def _on_top_drive(self, msg: TwistStamped) -> None:
+        self._record_command(self.sub_top_drive, msg)
         value = msg.twist.angular.z
         if self._accepted(msg, value, "top-drive speed twist.angular.z",
                           "max_top_drive_speed_rad_s", "rad/s"):
             self.rig.command(value, self.rig.commanded_hook_load_n)
 
     def _on_hook_load(self, msg: WrenchStamped) -> None:
+        self._record_command(self.sub_hook_load, msg)
         value = msg.wrench.force.z
         if self._accepted(msg, value, "hook load wrench.force.z", "max_hook_load_n", "N"):
             self.rig.command(self.rig.commanded_speed_rad_s, value)
@@ -313,7 +350,11 @@ class RigNode(Node):
             regime = REGIME_NAMES[s.stick_slip]
         status = DiagnosticStatus(name=f"{self.get_name()}: rig", hardware_id=self.preset.name)
         status.level, status.message = DiagnosticStatus.OK, regime
-        if self.paused:
+        record_error = self._record_error or (self.recorder.error if self.recorder else None)
+        if record_error:
+            status.level = DiagnosticStatus.ERROR
+            status.message = record_error
+        elif self.paused:
             status.message = "paused"
         elif age > self.p["command_timeout_s"]:
             status.level = DiagnosticStatus.WARN
@@ -357,12 +398,22 @@ class _Messages:
         self.clock = Clock()
 
 
+def _type_name(msg) -> str:
+    module = type(msg).__module__.split(".")[0]
+    return f"{module}/msg/{type(msg).__name__}"
+
+
 def _read_only(description: str) -> ParameterDescriptor:
     return ParameterDescriptor(description=description, read_only=True)
 
 
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args)
+    # Our own SIGINT/SIGTERM handlers only raise a flag, so the node always stops between two
+    # ticks: no tick is cut in half (published but not recorded, or recorded in part).
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop: list[int] = []
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda signum, frame: stop.append(signum))
     node = executor = None
     try:
         node = RigNode()
@@ -374,26 +425,23 @@ def main(args: list[str] | None = None) -> int:
         if node.max_speed:
             # ticks back to back; commands, services and diagnostics once per wall millisecond
             next_spin = 0.0
-            while rclpy.ok():
+            while not stop:
                 node.tick()
                 now = time.monotonic()
                 if now >= next_spin:
                     executor.spin_once(timeout_sec=0.0)
                     next_spin = now + 1e-3
         else:
-            while rclpy.ok():
+            while not stop:
                 executor.spin_once(timeout_sec=0.1)
     except SystemExit as exc:     # a bad parameter at start-up: one clear line
         print(exc, file=sys.stderr)
         return 2
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except RCLError:
-        if rclpy.ok():
-            raise                 # only a failure raced by a signal's shutdown is expected
     finally:
         if node is not None:
             print(f"drill_sim_node: shut down at t = {node.sim_time_s:.3f} s", file=sys.stderr)
+            if node.recorder is not None:
+                node.recorder.close()
             if executor is not None:
                 executor.shutdown()
             node.destroy_node()

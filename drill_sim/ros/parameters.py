@@ -94,6 +94,8 @@ def specs(preset: Preset) -> list[Spec]:
              "hook-load commands above this are refused [N]", 0.0, 1e10),
         Spec("hoist_speed_limit_m_s", 0.5, "the string rises no faster than this [m/s]",
              1e-4, 100.0),
+        Spec("record", "", "bag directory to record the session into (rosbag2, MCAP); empty: "
+             "no recording", read_only=True),
         Spec("diagnostics_period_s", 1.0, "period of /diagnostics [s]", 0.05, 60.0,
              read_only=True),
     ]

@@ -1,0 +1,203 @@
+"""Reading rosbag2 MCAP bags (a bag directory or a bare ``.mcap``), tolerant of damage.
+
+Files are read record by record, so a file cut short by a crash yields every message before
+the cut; what could not be read is reported in ``BagInfo.problems`` rather than raised.
+``repair`` rewrites such a bag whole: summary, indexes and ``metadata.yaml``.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+from mcap.exceptions import McapError
+from mcap.records import Channel, Message, Metadata, Schema
+from mcap.stream_reader import StreamReader
+from mcap.writer import CompressionType, Writer
+
+from .writer import BagError, bag_information, file_entry
+
+
+@dataclass(frozen=True)
+class BagMessage:
+    topic: str
+    type_name: str
+    data: bytes
+    log_time_ns: int
+    publish_time_ns: int
+
+
+@dataclass
+class TopicInfo:
+    name: str
+    type_name: str
+    count: int = 0
+    offered_qos_profiles: str = ""
+
+
+@dataclass
+class BagInfo:
+    """What ``info`` found: topics with counts, time span, metadata records, problems."""
+
+    path: Path
+    files: list[Path]
+    topics: dict[str, TopicInfo] = field(default_factory=dict)
+    start_ns: int | None = None
+    end_ns: int | None = None
+    metadata: dict[str, dict[str, str]] = field(default_factory=dict)
+    problems: list[str] = field(default_factory=list)
+
+    @property
+    def message_count(self) -> int:
+        return sum(t.count for t in self.topics.values())
+
+    @property
+    def duration_s(self) -> float:
+        return 0.0 if self.start_ns is None else (self.end_ns - self.start_ns) * 1e-9
+
+
+def mcap_files(path: str | Path) -> list[Path]:
+    """The MCAP files of a bag directory (in order) or the bare file itself."""
+    path = Path(path)
+    if path.is_file():
+        return [path]
+    if not path.is_dir():
+        raise BagError(f"bag {path}: no such file or directory")
+    meta = path / "metadata.yaml"
+    if meta.is_file():
+        try:
+            info = yaml.safe_load(meta.read_text(encoding="utf-8"))["rosbag2_bagfile_information"]
+            files = [path / p for p in info.get("relative_file_paths", [])]
+            if files and all(f.is_file() for f in files):
+                return files
+        except (yaml.YAMLError, KeyError, TypeError):
+            pass                       # a broken metadata.yaml: fall back to the files present
+    files = sorted(path.glob("*.mcap"), key=_file_index)
+    if not files:
+        raise BagError(f"bag {path}: no .mcap file in it")
+    return files
+
+
+def _file_index(p: Path) -> tuple[int, str]:
+    stem = p.stem.rsplit("_", 1)
+    return (int(stem[1]) if len(stem) == 2 and stem[1].isdigit() else 0, p.name)
+
+
+def _records(path: Path, problems: list[str]) -> Iterator[object]:
+    try:
+        fh = open(path, "rb")
+    except OSError as exc:
+        problems.append(f"{path.name}: cannot open: {exc.strerror}")
+        return
+    with fh:
+        reader = StreamReader(fh, skip_magic=False, validate_crcs=True)
+        try:
+            yield from reader.records
+        except (McapError, ValueError, EOFError, OSError) as exc:
+            where = fh.tell()
+            size = os.fstat(fh.fileno()).st_size
+            problems.append(f"{path.name}: unreadable from about byte {where} of {size} "
+                            f"({type(exc).__name__}: {exc}); everything before was read")
+
+
+def read_messages(path: str | Path, topics: set[str] | None = None,
+                  problems: list[str] | None = None) -> Iterator[BagMessage]:
+    """Every readable message of the bag in file order (log-time order within a file)."""
+    problems = [] if problems is None else problems
+    for file in mcap_files(path):
+        schemas: dict[int, str] = {}
+        channels: dict[int, tuple[str, str]] = {}
+        for rec in _records(file, problems):
+            if isinstance(rec, Schema):
+                schemas[rec.id] = rec.name
+            elif isinstance(rec, Channel):
+                channels[rec.id] = (rec.topic, schemas.get(rec.schema_id, ""))
+            elif isinstance(rec, Message):
+                topic, type_name = channels.get(rec.channel_id, ("", ""))
+                if topics is None or topic in topics:
+                    yield BagMessage(topic, type_name, rec.data, rec.log_time, rec.publish_time)
+
+
+def info(path: str | Path) -> BagInfo:
+    """Scan the bag (all of it: a crashed file has no summary to trust)."""
+    files = mcap_files(path)
+    result = BagInfo(Path(path), files)
+    for file in files:
+        schemas: dict[int, str] = {}
+        channels: dict[int, str] = {}
+        for rec in _records(file, result.problems):
+            if isinstance(rec, Schema):
+                schemas[rec.id] = rec.name
+            elif isinstance(rec, Channel):
+                channels[rec.id] = rec.topic
+                result.topics.setdefault(rec.topic, TopicInfo(
+                    rec.topic, schemas.get(rec.schema_id, ""),
+                    offered_qos_profiles=rec.metadata.get("offered_qos_profiles", "")))
+            elif isinstance(rec, Message):
+                t = result.topics.get(channels.get(rec.channel_id, ""))
+                if t is not None:
+                    t.count += 1
+                result.start_ns = rec.log_time if result.start_ns is None \
+                    else min(result.start_ns, rec.log_time)
+                result.end_ns = rec.log_time if result.end_ns is None \
+                    else max(result.end_ns, rec.log_time)
+            elif isinstance(rec, Metadata):
+                result.metadata[rec.name] = dict(rec.metadata)
+    return result
+
+
+def repair(path: str | Path) -> BagInfo:
+    """Rewrite every file of the bag from what can be read, with summary and indexes, and write
+    ``metadata.yaml``. The damaged originals are kept beside as ``*.mcap.damaged``."""
+    bag = Path(path)
+    if not bag.is_dir():
+        raise BagError(f"bag {bag}: repair works on a bag directory")
+    entries: list[dict] = []
+    topics: dict[str, dict] = {}
+    for file in mcap_files(bag):
+        damaged = file.with_name(file.name + ".damaged")
+        file.replace(damaged)
+        entries.append(_rewrite(damaged, file, topics))
+    text = yaml.safe_dump(bag_information(list(topics.values()), entries), sort_keys=False)
+    (bag / "metadata.yaml").write_text(text, encoding="utf-8")
+    return info(bag)
+
+
+def _rewrite(source: Path, target: Path, topics: dict[str, dict]) -> dict:
+    """Copy every readable record of ``source`` into a complete MCAP file ``target``; count
+    messages per topic into ``topics``; return the file's metadata.yaml entry."""
+    schema_ids: dict[int, int] = {}
+    schema_names: dict[int, str] = {}
+    channel_ids: dict[int, int] = {}
+    channel_topics: dict[int, str] = {}
+    count, start, end = 0, None, 0
+    with open(target, "wb") as out:
+        writer = Writer(out, compression=CompressionType.ZSTD)
+        writer.start(profile="ros2", library="drill_sim repair")
+        for rec in _records(source, []):
+            if isinstance(rec, Schema):
+                schema_ids[rec.id] = writer.register_schema(rec.name, rec.encoding, rec.data)
+                schema_names[rec.id] = rec.name
+            elif isinstance(rec, Channel):
+                channel_ids[rec.id] = writer.register_channel(
+                    rec.topic, rec.message_encoding, schema_ids.get(rec.schema_id, 0),
+                    dict(rec.metadata))
+                channel_topics[rec.id] = rec.topic
+                topics.setdefault(rec.topic, {
+                    "name": rec.topic, "type": schema_names.get(rec.schema_id, ""),
+                    "qos": yaml.safe_load(rec.metadata.get("offered_qos_profiles", "")) or [],
+                    "hash": rec.metadata.get("topic_type_hash", ""), "count": 0})
+            elif isinstance(rec, Message) and rec.channel_id in channel_ids:
+                writer.add_message(channel_ids[rec.channel_id], rec.log_time, rec.data,
+                                   rec.publish_time, rec.sequence)
+                topics[channel_topics[rec.channel_id]]["count"] += 1
+                count += 1
+                start = rec.log_time if start is None else min(start, rec.log_time)
+                end = max(end, rec.log_time)
+            elif isinstance(rec, Metadata) and rec.name != "rosbag2":
+                writer.add_metadata(rec.name, dict(rec.metadata))
+        writer.finish()
+    return file_entry(target.name, start, end, count)

@@ -1,0 +1,241 @@
+"""Writing rosbag2 bags (metadata version 9, MCAP storage) exactly as the real tools read them.
+
+A bag is a directory holding ``metadata.yaml`` and ``<name>_<i>.mcap`` files: profile ``ros2``,
+one ``ros2msg`` schema per type (full definition), ``cdr`` channels carrying
+``offered_qos_profiles`` and ``topic_type_hash``, zstd chunks. Chunks are closed at least every
+``flush_interval_s`` (1 s), so a killed process loses at most that much; ``repair`` restores the
+summary and ``metadata.yaml`` afterwards.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+from mcap.writer import CompressionType, Writer
+
+from .schema import message_definition, type_hash
+
+INFINITE = {"sec": 9223372036, "nsec": 854775807}   # rmw's "unspecified" duration
+
+
+def qos_profile(reliability: str = "reliable", depth: int = 10,
+                durability: str = "volatile") -> dict:
+    """One offered QoS profile in rosbag2's metadata-version-9 form."""
+    return {"history": "keep_last", "depth": depth, "reliability": reliability,
+            "durability": durability, "deadline": dict(INFINITE), "lifespan": dict(INFINITE),
+            "liveliness": "automatic", "liveliness_lease_duration": dict(INFINITE),
+            "avoid_ros_namespace_conventions": False}
+
+
+def qos_yaml(profiles: list[dict]) -> str:
+    return yaml.safe_dump(profiles, sort_keys=False, default_flow_style=False)
+
+
+class BagError(OSError):
+    """A bag cannot be written or read: the message names the file and what went wrong."""
+
+
+@dataclass
+class _Topic:
+    name: str
+    type_name: str
+    qos_profiles: list[dict]
+    type_hash: str
+    count: int = 0
+    channel_id: int = -1
+
+
+@dataclass
+class _File:
+    path: Path
+    writer: Writer
+    stream: object
+    start_ns: int | None = None
+    end_ns: int = 0
+    count: int = 0
+    schema_ids: dict[str, int] = field(default_factory=dict)
+
+
+class BagWriter:
+    """Write a rosbag2 MCAP bag into the directory ``path`` (created; must not exist).
+
+    split_duration_s / split_size_bytes: start a new ``_<i>.mcap`` file past either (0 = never).
+    metadata: name -> {str: str} written as MCAP metadata records in every file.
+    """
+
+    def __init__(self, path: str | Path, *, split_duration_s: float = 0.0,
+                 split_size_bytes: int = 0, flush_interval_s: float = 1.0,
+                 chunk_size: int = 1 << 20, metadata: dict[str, dict[str, str]] | None = None,
+                 ros_distro: str = "jazzy") -> None:
+        self.path = Path(path)
+        if self.path.exists():
+            raise BagError(f"bag {self.path}: already exists; choose a new directory")
+        try:
+            self.path.mkdir(parents=True)
+        except OSError as exc:
+            raise BagError(f"bag {self.path}: cannot create it: {exc.strerror}") from None
+        self.split_duration_ns = int(split_duration_s * 1e9)
+        self.split_size_bytes = int(split_size_bytes)
+        self.flush_interval_s = flush_interval_s
+        self.chunk_size = chunk_size
+        self.metadata = dict(metadata or {})
+        self.ros_distro = ros_distro
+        self.topics: dict[str, _Topic] = {}
+        self.files: list[dict] = []
+        self._file: _File | None = None
+        self._last_flush = time.monotonic()
+        self.closed = False
+        self._open_file()
+
+    # ---- topics and messages -------------------------------------------------------------
+    def add_topic(self, name: str, type_name: str, qos: list[dict] | None = None) -> None:
+        """Declare a topic (full ROS name, ``pkg/msg/Type``) before writing to it."""
+        if name in self.topics:
+            return
+        topic = _Topic(name, type_name, qos or [qos_profile()], type_hash(type_name))
+        self.topics[name] = topic
+        self._register(topic)
+
+    def write(self, topic: str, data: bytes, log_time_ns: int,
+              publish_time_ns: int | None = None) -> None:
+        """Append one CDR-serialized message (receive time ``log_time_ns``)."""
+        t = self.topics[topic]
+        f = self._file
+        if f is None:
+            raise BagError(f"bag {self.path}: already closed")
+        if self.split_duration_ns and f.start_ns is not None \
+                and log_time_ns - f.start_ns >= self.split_duration_ns:
+            f = self._split()
+        elif self.split_size_bytes and f.stream.tell() >= self.split_size_bytes:
+            f = self._split()
+        f.writer.add_message(t.channel_id, log_time_ns, data,
+                             log_time_ns if publish_time_ns is None else publish_time_ns,
+                             t.count)
+        t.count += 1
+        f.count += 1
+        f.start_ns = log_time_ns if f.start_ns is None else min(f.start_ns, log_time_ns)
+        f.end_ns = max(f.end_ns, log_time_ns)
+        now = time.monotonic()
+        if now - self._last_flush >= self.flush_interval_s:
+            self.flush()
+            self._last_flush = now
+
+    def flush(self) -> None:
+        """Close the chunk in progress and push it to the disk."""
+        if self._file is not None:
+            self._file.writer.flush()
+            os.fsync(self._file.stream.fileno())
+
+    def close(self) -> None:
+        """Finish the file (summary, indexes) and write ``metadata.yaml``."""
+        if self.closed:
+            return
+        self._finish_file()
+        self._write_metadata_yaml()
+        self.closed = True
+
+    def __enter__(self) -> BagWriter:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # ---- files -------------------------------------------------------------------------
+    def _open_file(self) -> None:
+        index = len(self.files) + (self._file is not None)
+        path = self.path / f"{self.path.name}_{index}.mcap"
+        try:
+            stream = open(path, "wb")
+        except OSError as exc:
+            raise BagError(f"bag {self.path}: cannot create {path.name}: {exc.strerror}") \
+                from None
+        writer = Writer(stream, chunk_size=self.chunk_size, compression=CompressionType.ZSTD)
+        writer.start(profile="ros2", library="drill_sim")
+        self._file = _File(path, writer, stream)
+        for name, data in self.metadata.items():
+            writer.add_metadata(name, data)
+        for topic in self.topics.values():
+            self._register(topic)
+
+    def _register(self, topic: _Topic) -> None:
+        f = self._file
+        if topic.type_name not in f.schema_ids:
+            f.schema_ids[topic.type_name] = f.writer.register_schema(
+                topic.type_name, "ros2msg", message_definition(topic.type_name).encode())
+        topic.channel_id = f.writer.register_channel(
+            topic.name, "cdr", f.schema_ids[topic.type_name],
+            {"offered_qos_profiles": qos_yaml(topic.qos_profiles),
+             "topic_type_hash": topic.type_hash})
+
+    def _split(self) -> _File:
+        self._finish_file()
+        self._open_file()
+        return self._file
+
+    def _finish_file(self) -> None:
+        f = self._file
+        if f is None:
+            return
+        f.writer.add_metadata("rosbag2", {"serialized_metadata": yaml.safe_dump(
+            self._information(extra=f)["rosbag2_bagfile_information"], sort_keys=False)})
+        f.writer.finish()
+        f.stream.close()
+        self.files.append(self._file_entry(f))
+        self._file = None
+
+    def _information(self, extra: _File | None = None) -> dict:
+        files = self.files + ([self._file_entry(extra)] if extra is not None else [])
+        topics = [{"name": t.name, "type": t.type_name, "qos": t.qos_profiles,
+                   "hash": t.type_hash, "count": t.count} for t in self.topics.values()]
+        custom = {k: str(v) for k, v in self.metadata.get("session", {}).items()}
+        return bag_information(topics, files, custom, self.ros_distro)
+
+    @staticmethod
+    def _file_entry(f: _File) -> dict:
+        return file_entry(f.path.name, f.start_ns, f.end_ns, f.count)
+
+    def _write_metadata_yaml(self) -> None:
+        text = yaml.safe_dump(self._information(), sort_keys=False)
+        tmp = self.path / "metadata.yaml.tmp"
+        tmp.write_text(text, encoding="utf-8")
+        tmp.replace(self.path / "metadata.yaml")
+
+
+def file_entry(name: str, start_ns: int | None, end_ns: int, count: int) -> dict:
+    """One file's entry in metadata.yaml."""
+    start = start_ns or 0
+    return {"path": name, "starting_time": {"nanoseconds_since_epoch": start},
+            "duration": {"nanoseconds": max(0, end_ns - start)}, "message_count": count}
+
+
+def bag_information(topics: list[dict], files: list[dict], custom_data: dict | None = None,
+                    ros_distro: str = "jazzy") -> dict:
+    """metadata.yaml (version 9) from topics {name, type, qos (list), hash, count} and file
+    entries."""
+    live = [e for e in files if e["message_count"]]
+    start = min((e["starting_time"]["nanoseconds_since_epoch"] for e in live), default=0)
+    end = max((e["starting_time"]["nanoseconds_since_epoch"] + e["duration"]["nanoseconds"]
+               for e in live), default=start)
+    return {"rosbag2_bagfile_information": {
+        "version": 9,
+        "storage_identifier": "mcap",
+        "duration": {"nanoseconds": end - start},
+        "starting_time": {"nanoseconds_since_epoch": start},
+        "message_count": sum(e["message_count"] for e in files),
+        "topics_with_message_count": [
+            {"topic_metadata": {"name": t["name"], "type": t["type"],
+                                "serialization_format": "cdr",
+                                "offered_qos_profiles": t["qos"],
+                                "type_description_hash": t["hash"]},
+             "message_count": t["count"]} for t in topics],
+        "compression_format": "",
+        "compression_mode": "",
+        "relative_file_paths": [e["path"] for e in files],
+        "files": files,
+        "custom_data": dict(custom_data or {}),
+        "ros_distro": ros_distro,
+    }}

@@ -1,0 +1,54 @@
+"""In-node recording: every topic the node publishes and every command it receives, into a
+rosbag2 MCAP bag (``drill_sim.bag.writer``), with the session's context as MCAP metadata.
+
+Recording problems (full disk, unwritable path) stop the recording with a clear error and leave
+the simulation running; the bag written so far stays readable.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+from rclpy.serialization import serialize_message
+
+from .. import __version__
+from ..bag.writer import BagError, BagWriter, qos_profile
+
+
+class SessionRecorder:
+    def __init__(self, path: str, topics: dict[str, tuple[str, str]], *, reliability: str,
+                 context: dict[str, dict[str, str]], logger) -> None:
+        """topics: full topic name -> (type name pkg/msg/Type, reliability)."""
+        self.logger = logger
+        self.error: str | None = None
+        meta = {"session": {"package": "drill_sim", "version": __version__,
+                            "start_time_ns": str(time.time_ns()),
+                            "command_line": json.dumps(sys.argv)}}
+        for name, values in context.items():
+            meta.setdefault(name, {}).update(values)
+        self.writer = BagWriter(Path(path), metadata=meta)
+        for name, (type_name, rel) in topics.items():
+            self.writer.add_topic(name, type_name, [qos_profile(rel or reliability)])
+
+    def record(self, topic: str, msg, log_time_ns: int, publish_time_ns: int) -> None:
+        if self.error is not None:
+            return
+        try:
+            self.writer.write(topic, serialize_message(msg), log_time_ns, publish_time_ns)
+        except (OSError, BagError) as exc:
+            self.error = f"recording stopped: {exc}"
+            self.logger.error(self.error + "; the simulation keeps running")
+            try:
+                self.writer.close()
+            except (OSError, BagError):
+                pass
+
+    def close(self) -> None:
+        if self.error is None:
+            try:
+                self.writer.close()
+            except (OSError, BagError) as exc:
+                self.logger.error(f"closing the bag failed: {exc}")

@@ -1,0 +1,125 @@
+"""Bags written here, read back by independent readers (rosbags, mcap-ros2-support); damaged
+and foreign input."""
+
+from __future__ import annotations
+
+import subprocess
+
+import pytest
+from conftest import installed
+from geometry_msgs.msg import TwistStamped, WrenchStamped
+from mcap_ros2.reader import read_ros2_messages
+from rclpy.serialization import serialize_message
+from rosbags.interfaces import QosReliability
+from rosbags.rosbag2 import Reader
+from rosbags.typesys import Stores, get_typestore
+from sensor_msgs.msg import JointState
+
+from drill_sim.bag import reader
+from drill_sim.bag.schema import SEPARATOR, message_definition
+from drill_sim.bag.writer import BagError, BagWriter, qos_profile
+
+TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+
+
+def _write(path, n=300, **kwargs):
+    with BagWriter(path, metadata={"session": {"preset": "base"}}, **kwargs) as w:
+        w.add_topic("/rig/bit/wrench", "geometry_msgs/msg/WrenchStamped")
+        w.add_topic("/rig/cmd/top_drive", "geometry_msgs/msg/TwistStamped",
+                    [qos_profile("best_effort", 5)])
+        w.add_topic("/rig/joint_states", "sensor_msgs/msg/JointState")
+        for i in range(n):
+            t = 1_700_000_000_000_000_000 + i * 10_000_000          # 100 Hz
+            m = WrenchStamped()
+            m.header.frame_id = "bit"
+            m.wrench.force.z = 1000.0 * i
+            w.write("/rig/bit/wrench", serialize_message(m), t, t - 1000)
+            j = JointState(name=["bit_rotation"], position=[0.1 * i], velocity=[1.0],
+                           effort=[2.0])
+            w.write("/rig/joint_states", serialize_message(j), t)
+            if i % 10 == 0:
+                c = TwistStamped()
+                c.twist.angular.z = 6.0
+                w.write("/rig/cmd/top_drive", serialize_message(c), t)
+
+
+def test_rosbags_reads_counts_types_qos_and_values(tmp_path):
+    bag = tmp_path / "session"
+    _write(bag)
+    with Reader(bag) as r:
+        conns = {c.topic: c for c in r.connections}
+        assert {t: c.msgcount for t, c in conns.items()} == {
+            "/rig/bit/wrench": 300, "/rig/cmd/top_drive": 30, "/rig/joint_states": 300}
+        assert conns["/rig/bit/wrench"].msgtype == "geometry_msgs/msg/WrenchStamped"
+        assert conns["/rig/cmd/top_drive"].ext.offered_qos_profiles[0].reliability \
+            == QosReliability.BEST_EFFORT
+        assert conns["/rig/bit/wrench"].ext.offered_qos_profiles[0].reliability \
+            == QosReliability.RELIABLE
+        forces = [TYPESTORE.deserialize_cdr(raw, c.msgtype).wrench.force.z
+                  for c, _, raw in r.messages() if c.topic == "/rig/bit/wrench"]
+        assert forces == [1000.0 * i for i in range(300)]
+        assert r.duration == pytest.approx(2.99e9, abs=2)
+
+
+def test_mcap_ros2_support_decodes_every_message_from_the_schema(tmp_path):
+    bag = tmp_path / "session"
+    _write(bag)
+    decoded = list(read_ros2_messages(str(bag / "session_0.mcap")))
+    assert len(decoded) == 630
+    last = [d for d in decoded if d.channel.topic == "/rig/joint_states"][-1].ros_msg
+    assert list(last.position) == [pytest.approx(29.9)]
+    header = decoded[0].channel.metadata
+    assert header["topic_type_hash"].startswith("RIHS01_")
+    assert "reliability: reliable" in header["offered_qos_profiles"]
+
+
+def test_schema_text_carries_nested_definitions():
+    text = message_definition("geometry_msgs/msg/WrenchStamped")
+    assert text.count(SEPARATOR) == 4
+    for nested in ("MSG: geometry_msgs/Wrench", "MSG: geometry_msgs/Vector3",
+                   "MSG: std_msgs/Header", "MSG: builtin_interfaces/Time"):
+        assert nested in text
+
+
+def test_split_by_duration_makes_several_files_read_as_one_bag(tmp_path):
+    bag = tmp_path / "split"
+    _write(bag, split_duration_s=1.0)
+    files = sorted(p.name for p in bag.glob("*.mcap"))
+    assert files == ["split_0.mcap", "split_1.mcap", "split_2.mcap"]
+    with Reader(bag) as r:
+        assert r.message_count == 630
+
+
+def test_truncated_bag_is_read_up_to_the_cut_and_repaired(tmp_path):
+    bag = tmp_path / "cut"
+    _write(bag, n=3000, chunk_size=8192)             # many chunks, as a long session has
+    data = (bag / "cut_0.mcap").read_bytes()
+    (bag / "cut_0.mcap").write_bytes(data[: len(data) // 2])
+    (bag / "metadata.yaml").unlink()
+    found = reader.info(bag)
+    assert found.problems and "everything before was read" in found.problems[0]
+    assert 1000 < found.message_count < 6300
+    repaired = reader.repair(bag)
+    assert repaired.problems == [] and repaired.message_count == found.message_count
+    with Reader(bag) as r:
+        assert r.message_count == found.message_count
+
+
+def test_foreign_and_corrupt_input_get_clear_messages(tmp_path):
+    junk = tmp_path / "junk.mcap"
+    junk.write_bytes(b"this is not an mcap file at all" * 10)
+    assert "unreadable" in reader.info(junk).problems[0]
+    with pytest.raises(BagError, match="no such file"):
+        reader.info(tmp_path / "missing")
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(BagError, match=r"no \.mcap file"):
+        reader.info(empty)
+    with pytest.raises(BagError, match="already exists"):
+        BagWriter(empty)
+    proc = subprocess.run([installed("drill_sim"), "bag", "info", str(junk)],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0 and "unreadable" in proc.stdout and "Traceback" not in proc.stderr
+    proc = subprocess.run([installed("drill_sim"), "bag", "info", str(tmp_path / "missing")],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and "no such file" in proc.stderr
