@@ -17,6 +17,7 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -46,11 +47,12 @@ def spin(node, seconds: float) -> None:
         rclpy.spin_once(node, timeout_sec=0.001)
 
 
-def rate_and_cpu(node, seconds: float) -> None:
-    proc = start("-r", "__ns:=/bench")
+def rate_and_cpu(node, seconds: float, record: str = "") -> float:
+    ns = "/bench_rec" if record else "/bench"
+    proc = start("-r", f"__ns:={ns}", *(("-p", f"record:={record}") if record else ()))
     arrivals: list[float] = []
     p99s: list[float] = []
-    node.create_subscription(JointState, "/bench/drill_sim/joint_states",
+    node.create_subscription(JointState, f"{ns}/drill_sim/joint_states",
                              lambda m: arrivals.append(time.perf_counter()), 1000)
     node.create_subscription(DiagnosticArray, "/diagnostics", lambda m: p99s.extend(
         float(kv.value) for kv in m.status[0].values if kv.key == "tick_period_p99_ms"), 10)
@@ -67,11 +69,13 @@ def rate_and_cpu(node, seconds: float) -> None:
     t = np.array(arrivals)
     periods = np.diff(t) * 1e3
     rate = (len(t) - 1) / (t[-1] - t[0])
-    print(f"1000 Hz, all outputs, one external subscriber, {seconds:g} s: achieved "
+    print(f"1000 Hz, all outputs{', recording' if record else ''}, one external subscriber, "
+          f"{seconds:g} s: achieved "
           f"{rate:.1f} Hz ({100 * rate / 1000:.2f} %), received period p50 "
           f"{np.percentile(periods, 50):.3f} ms, p99 {np.percentile(periods, 99):.3f} ms; "
           f"tick period p99 in the node (worst 1 s window) {max(p99s):.3f} ms; "
           f"node CPU {100 * cpu:.1f} % of one core")
+    return cpu
 
 
 def latency(node, samples: int = 2000) -> None:
@@ -133,7 +137,10 @@ def main() -> None:
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     rclpy.init()
     node = rclpy.create_node("drill_sim_bench")
-    rate_and_cpu(node, args.seconds)
+    plain = rate_and_cpu(node, args.seconds)
+    with tempfile.TemporaryDirectory() as tmp:
+        recording = rate_and_cpu(node, args.seconds, record=f"{tmp}/bag")
+    print(f"CPU added by in-node recording: {100 * (recording - plain):.1f} % of one core")
     latency(node)
     max_speed(node, 1000.0)
     max_speed(node, 100.0)
