@@ -114,3 +114,14 @@ def test_unwritable_record_path_keeps_the_simulation_running(ros, tmp_path):
                  "an ERROR status about recording")
     error = next(s for s in statuses if s.level == DiagnosticStatus.ERROR)
     assert "not recording" in error.message and "a_file" in error.message
+
+
+def test_recording_splits_by_duration(ros, tmp_path):
+    bag = tmp_path / "split"
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/split", "-p",
+                     f"record:={bag}", "-p", "record_split_duration_s:=1.0"):
+        _wait_running(ros, "/split")
+        spin_for(ros, 2.5)
+    assert len(list(bag.glob("split_*.mcap"))) >= 3
+    with Reader(bag) as r:
+        assert r.message_count == reader.info(bag).message_count > 1000

@@ -207,7 +207,9 @@ class RigNode(Node):
         try:
             rec = SessionRecorder(self.p["record"], topics,
                                   reliability=self.p["qos_reliability"], context=context,
-                                  logger=self.get_logger())
+                                  logger=self.get_logger(),
+                                  split_duration_s=self.p["record_split_duration_s"],
+                                  split_size_bytes=self.p["record_split_size_bytes"])
         except (OSError, BagError) as exc:
             self.get_logger().error(f"not recording: {exc}; the simulation runs on")
             self._record_error = f"not recording: {exc}"

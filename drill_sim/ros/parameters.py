@@ -96,6 +96,10 @@ def specs(preset: Preset) -> list[Spec]:
              1e-4, 100.0),
         Spec("record", "", "bag directory to record the session into (rosbag2, MCAP); empty: "
              "no recording", read_only=True),
+        Spec("record_split_duration_s", 0.0, "start a new bag file after this long [s]; 0: never",
+             0.0, 1e7, read_only=True),
+        Spec("record_split_size_bytes", 0, "start a new bag file past this size [bytes]; 0: never",
+             0, 2**62, read_only=True),
         Spec("diagnostics_period_s", 1.0, "period of /diagnostics [s]", 0.05, 60.0,
              read_only=True),
     ]

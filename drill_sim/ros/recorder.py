@@ -20,7 +20,8 @@ from ..bag.writer import BagError, BagWriter, qos_profile
 
 class SessionRecorder:
     def __init__(self, path: str, topics: dict[str, tuple[str, str]], *, reliability: str,
-                 context: dict[str, dict[str, str]], logger) -> None:
+                 context: dict[str, dict[str, str]], logger, split_duration_s: float = 0.0,
+                 split_size_bytes: int = 0) -> None:
         """topics: full topic name -> (type name pkg/msg/Type, reliability)."""
         self.logger = logger
         self.error: str | None = None
@@ -29,7 +30,8 @@ class SessionRecorder:
                             "command_line": json.dumps(sys.argv)}}
         for name, values in context.items():
             meta.setdefault(name, {}).update(values)
-        self.writer = BagWriter(Path(path), metadata=meta)
+        self.writer = BagWriter(Path(path), metadata=meta, split_duration_s=split_duration_s,
+                                split_size_bytes=split_size_bytes)
         for name, (type_name, rel) in topics.items():
             self.writer.add_topic(name, type_name, [qos_profile(rel or reliability)])
 
