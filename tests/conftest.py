@@ -39,3 +39,17 @@ def installed(name: str) -> str:
     if found is None:
         pytest.fail(f"{name} is not installed: run the README's test command")
     return found
+
+
+@pytest.fixture(scope="module")
+def ros(request):
+    """A ROS test client node on this run's own domain; rclpy is imported only by ROS tests."""
+    import rclpy
+    from rosutil import isolate
+
+    isolate()
+    rclpy.init()
+    node = rclpy.create_node("test_client_" + request.module.__name__.replace(".", "_"))
+    yield node
+    node.destroy_node()
+    rclpy.shutdown()

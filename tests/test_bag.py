@@ -90,15 +90,19 @@ def test_split_by_duration_makes_several_files_read_as_one_bag(tmp_path):
         assert r.message_count == 630
 
 
-def test_truncated_bag_is_read_up_to_the_cut_and_repaired(tmp_path):
+@pytest.mark.parametrize("fraction", [0.05, 0.3, 0.5, 0.77, 0.9, 0.99, 0.9999])
+def test_truncated_bag_is_read_up_to_the_cut_and_repaired(tmp_path, fraction):
+    """A file cut anywhere (inside a chunk, an index, the summary) reads up to the cut."""
     bag = tmp_path / "cut"
     _write(bag, n=3000, chunk_size=8192)             # many chunks, as a long session has
     data = (bag / "cut_0.mcap").read_bytes()
-    (bag / "cut_0.mcap").write_bytes(data[: len(data) // 2])
+    (bag / "cut_0.mcap").write_bytes(data[: int(len(data) * fraction)])
     (bag / "metadata.yaml").unlink()
     found = reader.info(bag)
     assert found.problems and "everything before was read" in found.problems[0]
-    assert 1000 < found.message_count < 6300
+    assert found.message_count <= 6300
+    if fraction >= 0.3:
+        assert found.message_count > 6300 * (fraction - 0.2)
     repaired = reader.repair(bag)
     assert repaired.problems == [] and repaired.message_count == found.message_count
     with Reader(bag) as r:
@@ -123,3 +127,17 @@ def test_foreign_and_corrupt_input_get_clear_messages(tmp_path):
     proc = subprocess.run([installed("drill_sim"), "bag", "info", str(tmp_path / "missing")],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and "no such file" in proc.stderr
+
+
+@pytest.mark.parametrize("position", [0.02, 0.25, 0.5, 0.75, 0.97])
+def test_corrupted_bytes_never_crash_the_reader(tmp_path, position):
+    bag = tmp_path / "bad"
+    _write(bag, n=2000, chunk_size=8192)
+    path = bag / "bad_0.mcap"
+    data = bytearray(path.read_bytes())
+    at = int(len(data) * position)
+    data[at:at + 16] = b"\xff" * 16
+    path.write_bytes(bytes(data))
+    found = reader.info(bag)                       # reports, never raises
+    assert found.problems or found.message_count == 4200
+    assert all("everything before was read" in p for p in found.problems)

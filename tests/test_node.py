@@ -10,7 +10,7 @@ import rclpy
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
-from rosutil import NodeProcess, isolate, spin_for, wait_for
+from rosutil import NodeProcess, spin_for, wait_for
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 from std_srvs.srv import SetBool, Trigger
@@ -61,16 +61,6 @@ class Client:
         self.wrench.clear()
         spin_for(self.node, seconds)
         return np.array(self.wrench)
-
-
-@pytest.fixture(scope="module")
-def ros():
-    isolate()
-    rclpy.init()
-    node = rclpy.create_node("drill_sim_test_client")
-    yield node
-    node.destroy_node()
-    rclpy.shutdown()
 
 
 @pytest.fixture(scope="module")

@@ -9,21 +9,11 @@ import pytest
 import rclpy
 from geometry_msgs.msg import WrenchStamped
 from rosgraph_msgs.msg import Clock
-from rosutil import NodeProcess, isolate, spin_for, wait_for
+from rosutil import NodeProcess, spin_for, wait_for
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 
 from drill_sim.core import RPM
-
-
-@pytest.fixture(scope="module")
-def ros():
-    isolate()
-    rclpy.init()
-    node = rclpy.create_node("drill_sim_process_test_client")
-    yield node
-    node.destroy_node()
-    rclpy.shutdown()
 
 
 def test_bad_startup_parameter_exits_with_a_clear_message(ros):

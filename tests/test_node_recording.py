@@ -7,14 +7,13 @@ import signal
 import time
 
 import pytest
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import TwistStamped
 from mcap_ros2.reader import read_ros2_messages
 from rosbags.interfaces import QosReliability
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
-from rosutil import NodeProcess, isolate, spin_for, wait_for
+from rosutil import NodeProcess, spin_for, wait_for
 from std_msgs.msg import Bool
 
 from drill_sim.bag import reader
@@ -23,16 +22,6 @@ OUTPUTS = {"/rec/drill_sim/bit/wrench", "/rec/drill_sim/bit/twist",
            "/rec/drill_sim/bit/stick_slip", "/rec/drill_sim/top_drive/wrench",
            "/rec/drill_sim/bit/depth_of_cut", "/rec/drill_sim/bit/hole_depth",
            "/rec/drill_sim/joint_states"}
-
-
-@pytest.fixture(scope="module")
-def ros():
-    isolate()
-    rclpy.init()
-    node = rclpy.create_node("drill_sim_recording_test_client")
-    yield node
-    node.destroy_node()
-    rclpy.shutdown()
 
 
 def _wait_running(ros, ns: str) -> list[bool]:

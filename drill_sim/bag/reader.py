@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
-from mcap.exceptions import McapError
 from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
@@ -96,7 +95,8 @@ def _records(path: Path, problems: list[str]) -> Iterator[object]:
         reader = StreamReader(fh, skip_magic=False, validate_crcs=True)
         try:
             yield from reader.records
-        except (McapError, ValueError, EOFError, OSError) as exc:
+        except Exception as exc:
+            # (McapError, struct.error, zstd errors, ...) ends the readable part of the file
             where = fh.tell()
             size = os.fstat(fh.fileno()).st_size
             problems.append(f"{path.name}: unreadable from about byte {where} of {size} "
