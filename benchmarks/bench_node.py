@@ -73,7 +73,8 @@ def rate_and_cpu(node, seconds: float, record: str = "") -> float:
           f"{seconds:g} s: achieved "
           f"{rate:.1f} Hz ({100 * rate / 1000:.2f} %), received period p50 "
           f"{np.percentile(periods, 50):.3f} ms, p99 {np.percentile(periods, 99):.3f} ms; "
-          f"tick period p99 in the node (worst 1 s window) {max(p99s):.3f} ms; "
+          f"tick period p99 in the node per 1 s window: median {np.median(p99s):.3f} ms, "
+          f"worst {max(p99s):.3f} ms; "
           f"node CPU {100 * cpu:.1f} % of one core")
     return cpu
 
