@@ -141,3 +141,16 @@ def test_corrupted_bytes_never_crash_the_reader(tmp_path, position):
     found = reader.info(bag)                       # reports, never raises
     assert found.problems or found.message_count == 4200
     assert all("everything before was read" in p for p in found.problems)
+
+
+def test_rig_series_refuses_foreign_or_missing_joint_states(tmp_path):
+    from drill_sim.bag.series import rig_series
+    bag = tmp_path / "foreign"
+    _write(bag, n=20)                              # joint_states with one joint of its own
+    with pytest.raises(BagError, match="expected drill_sim's"):
+        rig_series(bag)
+    with pytest.raises(BagError, match="no sensor_msgs/msg/JointState topic /x"):
+        rig_series(bag, "/x")
+    proc = subprocess.run([installed("drill_sim"), "bag", "metrics", str(bag)],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and "expected drill_sim's" in proc.stderr

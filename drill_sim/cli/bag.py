@@ -4,33 +4,89 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
+import json
+import math
 from pathlib import Path
 
+import numpy as np
+
 from ..bag import reader
+from ..bag.series import rig_series
 from ..bag.writer import BagError
+from ..core import RPM
 from .errors import UsageError
+from .plot import plot_time_series
 
 
 def add_arguments(sub) -> None:
-    bag = sub.add_parser("bag", help="tools on rosbag2 MCAP bags: info, repair")
+    bag = sub.add_parser("bag", help="tools on rosbag2 MCAP bags: info, repair, metrics, "
+                                     "export, plot")
     tools = bag.add_subparsers(dest="bag_command", required=True, parser_class=type(bag))
     info = tools.add_parser("info", help="topics, types, counts, duration, metadata")
     info.add_argument("bag", type=Path, help="bag directory or .mcap file")
     repair = tools.add_parser("repair", help="rewrite a bag cut short by a crash: summary, "
                                              "indexes, metadata.yaml (originals kept)")
     repair.add_argument("bag", type=Path, help="bag directory")
+    for name, text in (("metrics", "SSI, stick fraction and means of a recorded rig session"),
+                       ("export", "the rig's time series as CSV (SI columns)"),
+                       ("plot", "PNG of bit speed, WOB, torques and the stick-slip flag")):
+        tool = tools.add_parser(name, help=text)
+        tool.add_argument("bag", type=Path, help="bag directory or .mcap file")
+        tool.add_argument("--topic", help="the rig's joint_states topic, if the bag has several")
+        tool.add_argument("--start", type=float, help="window start [s] after the first sample")
+        tool.add_argument("--end", type=float, help="window end [s] after the first sample")
+        if name == "metrics":
+            tool.add_argument("--json", action="store_true", help="one JSON object on stdout")
+        else:
+            tool.add_argument("--out", type=Path, required=True, help="output file")
 
 
 def run(args: argparse.Namespace) -> int:
     try:
         if args.bag_command == "info":
             print(render(reader.info(args.bag)))
+        elif args.bag_command in ("metrics", "export", "plot"):
+            return _series_command(args)
         else:
             result = reader.repair(args.bag)
             print(f"repaired {args.bag}: {result.message_count} messages over "
                   f"{result.duration_s:.3f} s kept; damaged originals left as *.mcap.damaged")
     except BagError as exc:
         raise UsageError(str(exc)) from None
+    return 0
+
+
+def _series_command(args: argparse.Namespace) -> int:
+    for name in ("start", "end"):
+        value = getattr(args, name)
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise UsageError(f"--{name} = {value}: expected a time >= 0 s")
+    out = getattr(args, "out", None)
+    if out is not None and not out.parent.exists():
+        raise UsageError(f"cannot write {out}: folder {out.parent} does not exist")
+    s = rig_series(args.bag, args.topic).window(args.start, args.end)
+    if args.bag_command == "metrics":
+        m = s.metrics()
+        if args.json:
+            print(json.dumps(m))
+        else:
+            print(f"{s.topic}: {m['samples']} samples over {m['duration_s']:.3f} s")
+            for key, value in m.items():
+                if key not in ("samples", "duration_s"):
+                    print(f"  {key:<24} {value:.6g}")
+    elif args.bag_command == "export":
+        fields = [f for f in s.__dataclass_fields__ if f != "topic"]
+        np.savetxt(out, np.column_stack([getattr(s, f) for f in fields]), delimiter=",",
+                   header=",".join(fields), comments="", fmt="%.9g")
+        print(f"{s.time_s.size} rows written to {out}")
+    else:
+        t = s.time_s - s.time_s[0]
+        plot_time_series(out, t, s.bit_speed_rad_s / RPM, s.top_drive_speed_rad_s / RPM,
+                         s.wob_n / 1e3, s.tob_nm / 1e3, s.surface_torque_nm / 1e3,
+                         (s.bit_speed_rad_s == 0.0) & (s.wob_n > 0.0),
+                         units={"time": "s", "speed": "rpm", "force": "kN", "torque": "kN m"},
+                         title=f"{args.bag.name}: {s.topic}")
+        print(f"plot written to {out}")
     return 0
 
 

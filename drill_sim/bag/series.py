@@ -1,0 +1,123 @@
+"""The rig's time series from a bag, decoded without ROS and all at once.
+
+The node's ``~/joint_states`` messages have one fixed layout within a session (same four joint
+names, so the same byte length), so their CDR bytes stack into one array and the float fields
+are read with a single numpy view: an hour at 1 kHz decodes in a fraction of a second.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .reader import read_messages
+from .writer import BagError
+
+JOINTS = ("top_drive", "hook", "bit_rotation", "bit_axial")
+JOINT_STATE = "sensor_msgs/msg/JointState"
+
+
+@dataclass(frozen=True)
+class RigSeries:
+    """SI time series of one rig, from its joint_states (see msg_docs/node.md)."""
+
+    topic: str
+    time_s: np.ndarray                 # header stamp
+    top_drive_speed_rad_s: np.ndarray
+    surface_torque_nm: np.ndarray
+    hook_load_n: np.ndarray
+    bit_depth_m: np.ndarray
+    bit_speed_rad_s: np.ndarray
+    tob_nm: np.ndarray
+    hole_depth_m: np.ndarray
+    rop_m_s: np.ndarray
+    wob_n: np.ndarray
+
+    def window(self, start_s: float | None, end_s: float | None) -> RigSeries:
+        t = self.time_s - self.time_s[0] if self.time_s.size else self.time_s
+        keep = np.ones(t.size, bool)
+        if start_s is not None:
+            keep &= t >= start_s
+        if end_s is not None:
+            keep &= t <= end_s
+        return RigSeries(self.topic, *(getattr(self, f)[keep] for f in _FIELDS))
+
+    def metrics(self) -> dict[str, float]:
+        """MODEL.md section 7 over the samples (each sample weighs the same: a fixed tick)."""
+        w = self.bit_speed_rad_s
+        if w.size == 0:
+            raise BagError(f"{self.topic}: no samples in the window")
+        stuck = (w == 0.0) & (self.wob_n > 0.0)
+        mean = float(np.mean(w))
+        return {
+            "duration_s": float(self.time_s[-1] - self.time_s[0]),
+            "samples": int(w.size),
+            "ssi": float((w.max() - w.min()) / (2 * mean)) if mean > 0 else float("inf"),
+            "stick_fraction": float(np.mean(stuck)),
+            "bounce_fraction": float(np.mean(self.wob_n == 0.0)),
+            "mean_bit_speed_rad_s": mean,
+            "mean_wob_n": float(np.mean(self.wob_n)),
+            "mean_tob_nm": float(np.mean(self.tob_nm)),
+            "mean_surface_torque_nm": float(np.mean(self.surface_torque_nm)),
+            "mean_rop_m_s": float(np.mean(self.rop_m_s)),
+        }
+
+
+_FIELDS = ("time_s", "top_drive_speed_rad_s", "surface_torque_nm", "hook_load_n", "bit_depth_m",
+           "bit_speed_rad_s", "tob_nm", "hole_depth_m", "rop_m_s", "wob_n")
+
+
+def _layout(data: bytes) -> tuple[list[str], int]:
+    """Joint names and the byte offset of the position array in one JointState message."""
+    def align(pos: int, n: int) -> int:
+        body = pos - 4                          # alignment counts from after the 4-byte header
+        return pos + (-body) % n
+
+    pos = 4 + 8                                 # encapsulation header, stamp
+    (length,) = struct.unpack_from("<I", data, pos)
+    pos = align(pos + 4 + length, 4)            # frame_id
+    (count,) = struct.unpack_from("<I", data, pos)
+    pos += 4
+    names = []
+    for _ in range(count):
+        pos = align(pos, 4)
+        (length,) = struct.unpack_from("<I", data, pos)
+        names.append(data[pos + 4:pos + 3 + length].decode())
+        pos += 4 + length
+    pos = align(pos, 4)
+    (n_pos,) = struct.unpack_from("<I", data, pos)
+    if n_pos != count:
+        raise BagError(f"joint_states with {count} names but {n_pos} positions")
+    return names, align(pos + 4, 8)
+
+
+def rig_series(bag: str | Path, topic: str | None = None) -> RigSeries:
+    """The rig series of ``topic`` (default: the one topic ending in ``joint_states``)."""
+    blobs: dict[str, list[bytes]] = {}
+    for m in read_messages(bag):
+        if m.type_name == JOINT_STATE and (topic is None or m.topic == topic):
+            blobs.setdefault(m.topic, []).append(m.data)
+    if not blobs:
+        raise BagError(f"bag {bag}: no {JOINT_STATE} topic{'' if topic is None else ' ' + topic}"
+                       " to read the rig from")
+    if len(blobs) > 1:
+        raise BagError(f"bag {bag}: several joint_states topics ({', '.join(sorted(blobs))}); "
+                       "choose one with --topic")
+    name, datas = next(iter(blobs.items()))
+    names, offset = _layout(datas[0])
+    if tuple(names) != JOINTS:
+        raise BagError(f"{name}: joints {names}, expected drill_sim's {list(JOINTS)}")
+    size = len(datas[0])
+    same = [d for d in datas if len(d) == size]
+    raw = np.frombuffer(b"".join(same), dtype=np.uint8).reshape(len(same), size)
+    stamp = raw[:, 4:12].copy().view("<i4")
+    time_s = stamp[:, 0] + 1e-9 * stamp[:, 1].view("<u4")
+    # position[4], then a uint32 count (4 bytes) and 4 bytes of padding before velocity[4], ...
+    f = np.ascontiguousarray(raw[:, offset:offset + 3 * 32 + 16]).view("<f8")
+    pos, vel, eff = f[:, 0:4], f[:, 5:9], f[:, 10:14]
+    return RigSeries(name, time_s, vel[:, 0].copy(), eff[:, 0].copy(), eff[:, 1].copy(),
+                     pos[:, 1].copy(), vel[:, 2].copy(), eff[:, 2].copy(), pos[:, 3].copy(),
+                     vel[:, 3].copy(), eff[:, 3].copy())
