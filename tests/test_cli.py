@@ -112,3 +112,14 @@ def test_main_job_runs_node_and_driver_and_writes_summary_and_plot(tmp_path):
 def test_main_job_bad_arguments():
     proc = run("run", "--scenario", "nowhere", check=False)
     assert proc.returncode == 2 and "scenario" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_main_job_reports_a_node_that_stops_early():
+    from rosutil import isolate
+    isolate()
+    proc = subprocess.run([installed("drill_sim"), "run", "--duration", "20", "--ros-args",
+                           "-p", "initial_state:=sideways"], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 1
+    assert "stopped early with status 2" in proc.stderr and "initial_state" in proc.stderr
+    assert "Traceback" not in proc.stderr + proc.stdout

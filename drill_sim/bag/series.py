@@ -18,6 +18,13 @@ from .writer import BagError
 
 JOINTS = ("top_drive", "hook", "bit_rotation", "bit_axial")
 JOINT_STATE = "sensor_msgs/msg/JointState"
+# where each quantity sits in the node's joint_states (msg_docs/node.md): (array, joint index)
+JOINT_FIELDS = {
+    "top_drive_speed_rad_s": ("velocity", 0), "surface_torque_nm": ("effort", 0),
+    "hook_load_n": ("effort", 1), "bit_depth_m": ("position", 1),
+    "bit_speed_rad_s": ("velocity", 2), "tob_nm": ("effort", 2),
+    "hole_depth_m": ("position", 3), "rop_m_s": ("velocity", 3), "wob_n": ("effort", 3),
+}
 
 
 @dataclass(frozen=True)
@@ -36,6 +43,20 @@ class RigSeries:
     rop_m_s: np.ndarray
     wob_n: np.ndarray
 
+    @classmethod
+    def from_joints(cls, topic: str, time_s: np.ndarray, position: np.ndarray,
+                    velocity: np.ndarray, effort: np.ndarray) -> RigSeries:
+        """From (N, 4) joint arrays in the order of JOINTS."""
+        arrays = {"position": position, "velocity": velocity, "effort": effort}
+        return cls(topic, np.asarray(time_s, float), **{
+            name: np.ascontiguousarray(arrays[kind][:, j]) for name, (kind, j)
+            in JOINT_FIELDS.items()})
+
+    @property
+    def stuck(self) -> np.ndarray:
+        """Samples with the bit stuck: not rotating while pressed on the rock."""
+        return (self.bit_speed_rad_s == 0.0) & (self.wob_n > 0.0)
+
     def window(self, start_s: float | None, end_s: float | None) -> RigSeries:
         t = self.time_s - self.time_s[0] if self.time_s.size else self.time_s
         keep = np.ones(t.size, bool)
@@ -50,7 +71,7 @@ class RigSeries:
         w = self.bit_speed_rad_s
         if w.size == 0:
             raise BagError(f"{self.topic}: no samples in the window")
-        stuck = (w == 0.0) & (self.wob_n > 0.0)
+        stuck = self.stuck
         mean = float(np.mean(w))
         return {
             "duration_s": float(self.time_s[-1] - self.time_s[0]),
@@ -117,7 +138,4 @@ def rig_series(bag: str | Path, topic: str | None = None) -> RigSeries:
     time_s = stamp[:, 0] + 1e-9 * stamp[:, 1].view("<u4")
     # position[4], then a uint32 count (4 bytes) and 4 bytes of padding before velocity[4], ...
     f = np.ascontiguousarray(raw[:, offset:offset + 3 * 32 + 16]).view("<f8")
-    pos, vel, eff = f[:, 0:4], f[:, 5:9], f[:, 10:14]
-    return RigSeries(name, time_s, vel[:, 0].copy(), eff[:, 0].copy(), eff[:, 1].copy(),
-                     pos[:, 1].copy(), vel[:, 2].copy(), eff[:, 2].copy(), pos[:, 3].copy(),
-                     vel[:, 3].copy(), eff[:, 3].copy())
+    return RigSeries.from_joints(name, time_s, f[:, 0:4], f[:, 5:9], f[:, 10:14])

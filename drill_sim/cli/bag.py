@@ -13,9 +13,8 @@ import numpy as np
 from ..bag import reader
 from ..bag.series import rig_series
 from ..bag.writer import BagError
-from ..core import RPM
 from .errors import UsageError
-from .plot import plot_time_series
+from .plot import plot_rig_series
 
 
 def add_arguments(sub) -> None:
@@ -80,12 +79,7 @@ def _series_command(args: argparse.Namespace) -> int:
                    header=",".join(fields), comments="", fmt="%.9g")
         print(f"{s.time_s.size} rows written to {out}")
     else:
-        t = s.time_s - s.time_s[0]
-        plot_time_series(out, t, s.bit_speed_rad_s / RPM, s.top_drive_speed_rad_s / RPM,
-                         s.wob_n / 1e3, s.tob_nm / 1e3, s.surface_torque_nm / 1e3,
-                         (s.bit_speed_rad_s == 0.0) & (s.wob_n > 0.0),
-                         units={"time": "s", "speed": "rpm", "force": "kN", "torque": "kN m"},
-                         title=f"{args.bag.name}: {s.topic}")
+        plot_rig_series(out, s, title=f"{args.bag.name}: {s.topic}")
         print(f"plot written to {out}")
     return 0
 

@@ -37,3 +37,14 @@ def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
         a.grid(alpha=0.3)
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def plot_rig_series(path: str | Path, series, title: str) -> None:
+    """The rig's SI series (drill_sim.bag.series.RigSeries) in rpm, kN and kN m."""
+    from ..core import RPM
+    t = series.time_s - series.time_s[0]
+    plot_time_series(path, t, series.bit_speed_rad_s / RPM, series.top_drive_speed_rad_s / RPM,
+                     series.wob_n / 1e3, series.tob_nm / 1e3, series.surface_torque_nm / 1e3,
+                     series.stuck,
+                     units={"time": "s", "speed": "rpm", "force": "kN", "torque": "kN m"},
+                     title=title)

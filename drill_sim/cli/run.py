@@ -43,7 +43,7 @@ def run_session(args: argparse.Namespace) -> int:
     from rclpy.executors import SingleThreadedExecutor
 
     from ..ros.monitor import Monitor
-    from .plot import plot_time_series
+    from .plot import plot_rig_series
 
     scenario = load_scenario(args.scenario)
     preset = load_preset(args.preset)
@@ -62,19 +62,21 @@ def run_session(args: argparse.Namespace) -> int:
     executor = SingleThreadedExecutor()
     executor.add_node(monitor)
     tty = sys.stdout.isatty()
+    node_exit = None
     try:
         start = time.monotonic()
         last_print = 0.0
         while time.monotonic() - start < duration + 2.0:
             executor.spin_once(timeout_sec=0.02)
-            if any(p.poll() is not None for p in procs[:1]):
-                raise RuntimeError("drill_sim_node exited early")
+            node_exit = procs[0].poll()
+            if node_exit is not None:
+                break
             now = time.monotonic()
             if now - last_print > (0.2 if tty else 5.0):
                 last_print = now
                 s = monitor.latest()
                 if s is not None:
-                    line = (f"t {s['time_s'] - monitor.samples()[0, 0]:6.1f} s | bit "
+                    line = (f"t {s['elapsed_s']:6.1f} s | bit "
                             f"{s['bit_speed_rad_s'] / RPM:6.1f} rpm (top drive "
                             f"{s['top_drive_speed_rad_s'] / RPM:5.1f}) | WOB "
                             f"{s['wob_n'] / 1e3:6.1f} kN | TOB {s['tob_nm'] / 1e3:5.2f} kN m | "
@@ -93,27 +95,28 @@ def run_session(args: argparse.Namespace) -> int:
                 p.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 p.kill()
-        data = monitor.samples().copy()
+        series, flags = monitor.series(), monitor.flags()
         executor.shutdown()
         monitor.destroy_node()
         rclpy.try_shutdown()
-    if data.shape[0] < 2:
+    if node_exit is not None:
+        print(f"drill_sim run: drill_sim_node stopped early with status {node_exit} "
+              "(its message is above)", file=sys.stderr)
+        return 1
+    if series.time_s.size < 2:
         print("drill_sim run: no samples received from the rig", file=sys.stderr)
         return 1
-    t = data[:, 0] - data[0, 0]
-    last = t >= t[-1] - min(20.0, t[-1] / 2)
-    speed = data[:, 2]
+    elapsed = series.time_s[-1] - series.time_s[0]
+    whole = series.metrics()
+    last = series.window(elapsed - min(20.0, elapsed / 2), None).metrics()
     print(f"drill_sim run: scenario '{scenario.name}' on preset '{preset.name}', "
-          f"{t[-1]:.1f} s simulated, {data.shape[0]} samples")
-    print(f"  hole drilled             {data[-1, 8]:8.3f} m")
-    print(f"  last {t[-1] - t[last][0]:4.1f} s: mean bit speed "
-          f"{speed[last].mean() / RPM:6.1f} rpm, WOB {data[last, 4].mean() / 1e3:6.1f} kN, "
-          f"TOB {data[last, 5].mean() / 1e3:5.2f} kN m")
-    print(f"  stick fraction (whole run)  {np.mean(speed == 0.0):.3f}; "
-          f"stick-slip flagged {np.mean(data[:, 9] > 0):.3f} of the time")
-    plot_time_series(args.plot, t, speed / RPM, data[:, 1] / RPM, data[:, 4] / 1e3,
-                     data[:, 5] / 1e3, data[:, 6] / 1e3, speed == 0.0,
-                     units={"time": "s", "speed": "rpm", "force": "kN", "torque": "kN m"},
-                     title=f"drill_sim run: {scenario.name} on {preset.name}")
+          f"{elapsed:.1f} s simulated, {whole['samples']} samples")
+    print(f"  hole drilled             {series.hole_depth_m[-1]:8.3f} m")
+    print(f"  last {last['duration_s']:4.1f} s: mean bit speed "
+          f"{last['mean_bit_speed_rad_s'] / RPM:6.1f} rpm, WOB {last['mean_wob_n'] / 1e3:6.1f} kN, "
+          f"TOB {last['mean_tob_nm'] / 1e3:5.2f} kN m")
+    print(f"  stick fraction (whole run)  {whole['stick_fraction']:.3f}; "
+          f"stick-slip flagged {np.mean(flags):.3f} of the time")
+    plot_rig_series(args.plot, series, title=f"drill_sim run: {scenario.name} on {preset.name}")
     print(f"plot written to {args.plot}")
     return 0

@@ -1,4 +1,5 @@
-"""A subscriber that collects the rig's ``~/joint_states`` for live status, summary and plots."""
+"""A subscriber that collects the rig's ``~/joint_states`` (and stick-slip flag) for the live
+status line, the summary and the plot of ``drill_sim run``."""
 
 from __future__ import annotations
 
@@ -7,21 +8,19 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 
+from ..bag.series import JOINT_FIELDS, RigSeries
 from . import interface as itf
-
-# columns of Monitor.samples(): time [s], top-drive speed [rad/s], bit speed [rad/s], ROP [m/s],
-# WOB [N], TOB [N m], surface torque [N m], hook load [N], hole depth [m], stick-slip flag
-COLUMNS = ("time_s", "top_drive_speed_rad_s", "bit_speed_rad_s", "rop_m_s", "wob_n", "tob_nm",
-           "surface_torque_nm", "hook_load_n", "hole_depth_m", "stick_slip")
 
 
 class Monitor(Node):
-    def __init__(self, rig: str = itf.NODE_NAME, capacity: int = 4_000_000) -> None:
+    def __init__(self, rig: str = itf.NODE_NAME) -> None:
         super().__init__("drill_sim_monitor")
         q = itf.qos("reliable", depth=1000)
-        self.create_subscription(JointState, f"{rig}/joint_states", self._on_joints, q)
+        self.topic = self.resolve_topic_name(f"{rig}/joint_states")
+        self.create_subscription(JointState, self.topic, self._on_joints, q)
         self.create_subscription(Bool, f"{rig}/bit/stick_slip", self._on_flag, q)
-        self._data = np.zeros((capacity, len(COLUMNS)))
+        # one row per sample: stamp [s], position[4], velocity[4], effort[4], flag; grows x2
+        self._rows = np.zeros((1 << 16, 14))
         self.count = 0
         self.flag = False
 
@@ -29,17 +28,30 @@ class Monitor(Node):
         self.flag = msg.data
 
     def _on_joints(self, msg: JointState) -> None:
-        if self.count >= self._data.shape[0] or len(msg.position) != 4:
+        if len(msg.position) != 4 or len(msg.velocity) != 4 or len(msg.effort) != 4:
             return
-        p, v, e = msg.position, msg.velocity, msg.effort
-        t = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
-        self._data[self.count] = (t, v[0], v[2], v[3], e[3], e[2], e[0], e[1], p[3], self.flag)
+        if self.count == self._rows.shape[0]:
+            self._rows = np.concatenate([self._rows, np.zeros_like(self._rows)])
+        row = self._rows[self.count]
+        row[0] = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+        row[1:5], row[5:9], row[9:13], row[13] = msg.position, msg.velocity, msg.effort, self.flag
         self.count += 1
 
-    def samples(self) -> np.ndarray:
-        return self._data[:self.count]
+    def series(self) -> RigSeries:
+        """What was received so far, as the same series ``drill_sim bag`` reads from a bag."""
+        r = self._rows[:self.count]
+        return RigSeries.from_joints(self.topic, r[:, 0], r[:, 1:5], r[:, 5:9], r[:, 9:13])
+
+    def flags(self) -> np.ndarray:
+        return self._rows[:self.count, 13] > 0.0
 
     def latest(self) -> dict[str, float] | None:
+        """The last sample by quantity name, plus ``elapsed_s`` and ``stick_slip``."""
         if self.count == 0:
             return None
-        return dict(zip(COLUMNS, self._data[self.count - 1], strict=True))
+        row = self._rows[self.count - 1]
+        arrays = {"position": row[1:5], "velocity": row[5:9], "effort": row[9:13]}
+        out = {name: float(arrays[kind][j]) for name, (kind, j) in JOINT_FIELDS.items()}
+        out["elapsed_s"] = float(row[0] - self._rows[0, 0])
+        out["stick_slip"] = bool(row[13])
+        return out
