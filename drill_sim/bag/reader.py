@@ -103,22 +103,32 @@ def _records(path: Path, problems: list[str]) -> Iterator[object]:
                             f"({type(exc).__name__}: {exc}); everything before was read")
 
 
+def _walk(path: Path, problems: list[str]) -> Iterator[tuple[object, str, str]]:
+    """Each readable record of one file with the topic and type it belongs to: set for channels
+    and messages (from the schemas and channels seen before them), empty otherwise."""
+    schemas: dict[int, str] = {}
+    channels: dict[int, tuple[str, str]] = {}
+    for rec in _records(path, problems):
+        if isinstance(rec, Schema):
+            schemas[rec.id] = rec.name
+            yield rec, "", rec.name
+        elif isinstance(rec, Channel):
+            channels[rec.id] = (rec.topic, schemas.get(rec.schema_id, ""))
+            yield (rec, *channels[rec.id])
+        elif isinstance(rec, Message):
+            yield (rec, *channels.get(rec.channel_id, ("", "")))
+        else:
+            yield rec, "", ""
+
+
 def read_messages(path: str | Path, topics: set[str] | None = None,
                   problems: list[str] | None = None) -> Iterator[BagMessage]:
     """Every readable message of the bag in file order (log-time order within a file)."""
     problems = [] if problems is None else problems
     for file in mcap_files(path):
-        schemas: dict[int, str] = {}
-        channels: dict[int, tuple[str, str]] = {}
-        for rec in _records(file, problems):
-            if isinstance(rec, Schema):
-                schemas[rec.id] = rec.name
-            elif isinstance(rec, Channel):
-                channels[rec.id] = (rec.topic, schemas.get(rec.schema_id, ""))
-            elif isinstance(rec, Message):
-                topic, type_name = channels.get(rec.channel_id, ("", ""))
-                if topics is None or topic in topics:
-                    yield BagMessage(topic, type_name, rec.data, rec.log_time, rec.publish_time)
+        for rec, topic, type_name in _walk(file, problems):
+            if isinstance(rec, Message) and (topics is None or topic in topics):
+                yield BagMessage(topic, type_name, rec.data, rec.log_time, rec.publish_time)
 
 
 def info(path: str | Path) -> BagInfo:
@@ -126,20 +136,14 @@ def info(path: str | Path) -> BagInfo:
     files = mcap_files(path)
     result = BagInfo(Path(path), files)
     for file in files:
-        schemas: dict[int, str] = {}
-        channels: dict[int, str] = {}
-        for rec in _records(file, result.problems):
-            if isinstance(rec, Schema):
-                schemas[rec.id] = rec.name
-            elif isinstance(rec, Channel):
-                channels[rec.id] = rec.topic
-                result.topics.setdefault(rec.topic, TopicInfo(
-                    rec.topic, schemas.get(rec.schema_id, ""),
+        for rec, topic, type_name in _walk(file, result.problems):
+            if isinstance(rec, Channel):
+                result.topics.setdefault(topic, TopicInfo(
+                    topic, type_name,
                     offered_qos_profiles=rec.metadata.get("offered_qos_profiles", "")))
             elif isinstance(rec, Message):
-                t = result.topics.get(channels.get(rec.channel_id, ""))
-                if t is not None:
-                    t.count += 1
+                if topic in result.topics:
+                    result.topics[topic].count += 1
                 result.start_ns = rec.log_time if result.start_ns is None \
                     else min(result.start_ns, rec.log_time)
                 result.end_ns = rec.log_time if result.end_ns is None \
@@ -170,30 +174,26 @@ def _rewrite(source: Path, target: Path, topics: dict[str, dict]) -> dict:
     """Copy every readable record of ``source`` into a complete MCAP file ``target``; count
     messages per topic into ``topics``; return the file's metadata.yaml entry."""
     schema_ids: dict[int, int] = {}
-    schema_names: dict[int, str] = {}
     channel_ids: dict[int, int] = {}
-    channel_topics: dict[int, str] = {}
     count, start, end = 0, None, 0
     with open(target, "wb") as out:
         writer = Writer(out, compression=CompressionType.ZSTD)
         writer.start(profile="ros2", library="drill_sim repair")
-        for rec in _records(source, []):
+        for rec, topic, type_name in _walk(source, []):
             if isinstance(rec, Schema):
                 schema_ids[rec.id] = writer.register_schema(rec.name, rec.encoding, rec.data)
-                schema_names[rec.id] = rec.name
             elif isinstance(rec, Channel):
                 channel_ids[rec.id] = writer.register_channel(
-                    rec.topic, rec.message_encoding, schema_ids.get(rec.schema_id, 0),
+                    topic, rec.message_encoding, schema_ids.get(rec.schema_id, 0),
                     dict(rec.metadata))
-                channel_topics[rec.id] = rec.topic
-                topics.setdefault(rec.topic, {
-                    "name": rec.topic, "type": schema_names.get(rec.schema_id, ""),
+                topics.setdefault(topic, {
+                    "name": topic, "type": type_name,
                     "qos": yaml.safe_load(rec.metadata.get("offered_qos_profiles", "")) or [],
                     "hash": rec.metadata.get("topic_type_hash", ""), "count": 0})
             elif isinstance(rec, Message) and rec.channel_id in channel_ids:
                 writer.add_message(channel_ids[rec.channel_id], rec.log_time, rec.data,
                                    rec.publish_time, rec.sequence)
-                topics[channel_topics[rec.channel_id]]["count"] += 1
+                topics[topic]["count"] += 1
                 count += 1
                 start = rec.log_time if start is None else min(start, rec.log_time)
                 end = max(end, rec.log_time)
