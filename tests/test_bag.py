@@ -73,6 +73,50 @@ def test_mcap_ros2_support_decodes_every_message_from_the_schema(tmp_path):
     assert "reliability: reliable" in header["offered_qos_profiles"]
 
 
+def test_summary_and_message_indexes_lead_an_indexed_reader_to_every_message(tmp_path):
+    """Readers that seek (Foxglove, rosbag2) go through the summary, the chunk indexes and the
+    per-chunk message indexes: each index entry must point at a message of its channel and
+    time, and the statistics must count what is there."""
+    import zstandard
+    from mcap.reader import SeekingReader
+    from mcap.records import Chunk, MessageIndex
+    from mcap.stream_reader import StreamReader, breakup_chunk
+
+    bag = tmp_path / "session"
+    _write(bag, n=3000, chunk_size=20_000)                # many chunks
+    path = bag / "session_0.mcap"
+    with open(path, "rb") as fh:
+        r = SeekingReader(fh, validate_crcs=True)
+        summary = r.get_summary()
+        stats = summary.statistics
+        assert stats.message_count == 6300 and len(summary.chunk_indexes) > 10
+        by_topic = {summary.channels[k].topic: v for k, v in stats.channel_message_counts.items()}
+        assert by_topic == {"/rig/bit/wrench": 3000, "/rig/cmd/top_drive": 300,
+                            "/rig/joint_states": 3000}
+        later = list(r.iter_messages(topics=["/rig/cmd/top_drive"],
+                                     starting_at=1_700_000_000_000_000_000 + 15_000_000_000))
+        assert [m.log_time for _, _, m in later][:2] == [
+            1_700_000_000_000_000_000 + 15_000_000_000 + k * 100_000_000 for k in range(2)]
+        assert len(later) == 150
+    checked = 0
+    chunk = None
+    with open(path, "rb") as fh:
+        for rec in StreamReader(fh, emit_chunks=True).records:
+            if isinstance(rec, Chunk):
+                raw = zstandard.ZstdDecompressor().decompress(rec.data, rec.uncompressed_size)
+                chunk = rec
+            elif isinstance(rec, MessageIndex):
+                for t, offset in rec.records:
+                    msg = next(iter(breakup_chunk(Chunk(
+                        compression="", data=raw[offset:], message_start_time=0,
+                        message_end_time=0, uncompressed_crc=0,
+                        uncompressed_size=len(raw) - offset))))
+                    assert (msg.channel_id, msg.log_time) == (rec.channel_id, t)
+                    assert chunk.message_start_time <= t <= chunk.message_end_time
+                    checked += 1
+    assert checked == 6300
+
+
 def test_schema_text_carries_nested_definitions():
     text = message_definition("geometry_msgs/msg/WrenchStamped")
     assert text.count(SEPARATOR) == 4

@@ -9,14 +9,13 @@ summary and ``metadata.yaml`` afterwards.
 
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
-from mcap.writer import CompressionType, Writer
 
+from .mcap_file import McapFileWriter
 from .schema import message_definition, type_hash
 
 INFINITE = {"sec": 9223372036, "nsec": 854775807}   # rmw's "unspecified" duration
@@ -52,11 +51,9 @@ class _Topic:
 @dataclass
 class _File:
     path: Path
-    writer: Writer
+    writer: McapFileWriter
     stream: object
     start_ns: int | None = None
-    end_ns: int = 0
-    count: int = 0
     schema_ids: dict[str, int] = field(default_factory=dict)
 
 
@@ -107,18 +104,15 @@ class BagWriter:
         f = self._file
         if f is None:
             raise BagError(f"bag {self.path}: already closed")
-        if self.split_duration_ns and f.start_ns is not None \
-                and log_time_ns - f.start_ns >= self.split_duration_ns:
+        if f.start_ns is None:
+            f.start_ns = log_time_ns
+        elif (self.split_duration_ns and log_time_ns - f.start_ns >= self.split_duration_ns) \
+                or (self.split_size_bytes and f.writer.size_bytes >= self.split_size_bytes):
             f = self._split()
-        elif self.split_size_bytes and f.stream.tell() >= self.split_size_bytes:
-            f = self._split()
-        f.writer.add_message(t.channel_id, log_time_ns, data,
-                             log_time_ns if publish_time_ns is None else publish_time_ns,
-                             t.count)
+            f.start_ns = log_time_ns
+        f.writer.add_message(t.channel_id, t.count, log_time_ns,
+                             log_time_ns if publish_time_ns is None else publish_time_ns, data)
         t.count += 1
-        f.count += 1
-        f.start_ns = log_time_ns if f.start_ns is None else min(f.start_ns, log_time_ns)
-        f.end_ns = max(f.end_ns, log_time_ns)
         now = time.monotonic()
         if now - self._last_flush >= self.flush_interval_s:
             self.flush()
@@ -127,8 +121,8 @@ class BagWriter:
     def flush(self) -> None:
         """Close the chunk in progress and push it to the disk."""
         if self._file is not None:
-            self._file.writer.flush()
-            os.fsync(self._file.stream.fileno())
+            self._file.writer.close_chunk()
+            self._file.writer.sync()
 
     def close(self) -> None:
         """Finish the file (summary, indexes) and write ``metadata.yaml``."""
@@ -153,8 +147,8 @@ class BagWriter:
         except OSError as exc:
             raise BagError(f"bag {self.path}: cannot create {path.name}: {exc.strerror}") \
                 from None
-        writer = Writer(stream, chunk_size=self.chunk_size, compression=CompressionType.ZSTD)
-        writer.start(profile="ros2", library="drill_sim")
+        writer = McapFileWriter(stream, profile="ros2", library="drill_sim",
+                                chunk_size=self.chunk_size)
         self._file = _File(path, writer, stream)
         for name, data in self.metadata.items():
             writer.add_metadata(name, data)
@@ -164,9 +158,9 @@ class BagWriter:
     def _register(self, topic: _Topic) -> None:
         f = self._file
         if topic.type_name not in f.schema_ids:
-            f.schema_ids[topic.type_name] = f.writer.register_schema(
+            f.schema_ids[topic.type_name] = f.writer.add_schema(
                 topic.type_name, "ros2msg", message_definition(topic.type_name).encode())
-        topic.channel_id = f.writer.register_channel(
+        topic.channel_id = f.writer.add_channel(
             topic.name, "cdr", f.schema_ids[topic.type_name],
             {"offered_qos_profiles": qos_yaml(topic.qos_profiles),
              "topic_type_hash": topic.type_hash})
@@ -180,6 +174,7 @@ class BagWriter:
         f = self._file
         if f is None:
             return
+        f.writer.close_chunk()
         f.writer.add_metadata("rosbag2", {"serialized_metadata": yaml.safe_dump(
             self._information(extra=f)["rosbag2_bagfile_information"], sort_keys=False)})
         f.writer.finish()
@@ -196,7 +191,8 @@ class BagWriter:
 
     @staticmethod
     def _file_entry(f: _File) -> dict:
-        return file_entry(f.path.name, f.start_ns, f.end_ns, f.count)
+        w = f.writer
+        return file_entry(f.path.name, w.start_time, w.end_time or 0, w.message_count)
 
     def _write_metadata_yaml(self) -> None:
         text = yaml.safe_dump(self._information(), sort_keys=False)

@@ -25,6 +25,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64
 from std_srvs.srv import SetBool, Trigger
 
+from ..bag import cdr
 from ..bag.writer import BagError
 from ..core import NoSteadyDrilling, ParameterError, Rig, load_preset
 from ..core.rig import RigSample
@@ -84,16 +85,19 @@ class RigNode(Node):
         self.create_service(SetBool, itf.SRV_PAUSE, self._on_pause)
         self.create_service(Trigger, itf.SRV_STEP, self._on_step)
 
-        self._msgs = _Messages()
         self._record_error: str | None = None
-        m = self._msgs
-        self._outputs = [(self.pub_bit_wrench, m.bit_wrench), (self.pub_bit_twist, m.bit_twist),
-                         (self.pub_flag, m.flag), (self.pub_td_wrench, m.td_wrench),
-                         (self.pub_doc, m.doc), (self.pub_hole, m.hole),
-                         (self.pub_joints, m.joints)]
+        # outputs in publishing order; _encode_sample returns their bytes in the same order
+        self._outputs: list[tuple[object, str]] = [
+            (self.pub_bit_wrench, "geometry_msgs/msg/WrenchStamped"),
+            (self.pub_bit_twist, "geometry_msgs/msg/TwistStamped"),
+            (self.pub_flag, "std_msgs/msg/Bool"),
+            (self.pub_td_wrench, "geometry_msgs/msg/WrenchStamped"),
+            (self.pub_doc, "std_msgs/msg/Float64"), (self.pub_hole, "std_msgs/msg/Float64"),
+            (self.pub_joints, "sensor_msgs/msg/JointState")]
         if self.pub_clock is not None:
-            self._outputs.insert(0, (self.pub_clock, m.clock))
+            self._outputs.insert(0, (self.pub_clock, "rosgraph_msgs/msg/Clock"))
         self._output_names = [pub.topic_name for pub, _ in self._outputs]
+        self._enc = _Encoders()
         self.recorder = self._start_recorder() if self.p["record"] else None
         self._offset_s = 0.0                     # simulated time before the last reset
         self.paused = False
@@ -164,34 +168,30 @@ class RigNode(Node):
         self._tick_count += 1
 
     def publish_sample(self, s: RigSample) -> None:
-        ns = self.stamp_ns()
-        m = self._msgs
-        for msg in (m.bit_wrench, m.bit_twist, m.td_wrench):
-            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(ns, 1_000_000_000)
-        m.joints.header.stamp = m.bit_wrench.header.stamp
-        m.bit_wrench.wrench.force.z = s.wob_n
-        m.bit_wrench.wrench.torque.z = s.tob_nm
-        m.bit_twist.twist.linear.z = s.rop_m_s
-        m.bit_twist.twist.angular.z = s.bit_speed_rad_s
-        m.td_wrench.wrench.force.z = s.hook_load_n
-        m.td_wrench.wrench.torque.z = s.surface_torque_nm
-        m.flag.data = s.stick_slip
-        m.doc.data = s.depth_of_cut_m
-        m.hole.data = s.hole_depth_m
-        m.joints.position = [s.top_drive_angle_rad, s.bit_depth_m, s.bit_angle_rad, s.hole_depth_m]
-        m.joints.velocity = [s.top_drive_speed_rad_s, s.rop_m_s, s.bit_speed_rad_s, s.rop_m_s]
-        m.joints.effort = [s.surface_torque_nm, s.hook_load_n, s.tob_nm, s.wob_n]
-        m.clock.clock = m.bit_wrench.header.stamp
-        for pub, msg in self._outputs:
-            pub.publish(msg)
+        """Encode the sample once; publish those bytes and record the very same bytes."""
+        sec, nsec = divmod(self.stamp_ns(), 1_000_000_000)
+        e = self._enc
+        data = [
+            e.bit_wrench(sec, nsec, (0.0, 0.0, s.wob_n, 0.0, 0.0, s.tob_nm)),
+            e.bit_twist(sec, nsec, (0.0, 0.0, s.rop_m_s, 0.0, 0.0, s.bit_speed_rad_s)),
+            e.flag(s.stick_slip),
+            e.td_wrench(sec, nsec, (0.0, 0.0, s.hook_load_n, 0.0, 0.0, s.surface_torque_nm)),
+            e.float64(s.depth_of_cut_m),
+            e.float64(s.hole_depth_m),
+            e.joints(sec, nsec,
+                     (s.top_drive_angle_rad, s.bit_depth_m, s.bit_angle_rad, s.hole_depth_m),
+                     (s.top_drive_speed_rad_s, s.rop_m_s, s.bit_speed_rad_s, s.rop_m_s),
+                     (s.surface_torque_nm, s.hook_load_n, s.tob_nm, s.wob_n))]
+        if self.pub_clock is not None:
+            data.insert(0, e.clock(sec, nsec))
+        for (pub, _), raw in zip(self._outputs, data, strict=True):
+            pub.publish(raw)
         if self.recorder is not None:
-            now = time.time_ns()
-            for name, (_, msg) in zip(self._output_names, self._outputs, strict=True):
-                self.recorder.record(name, msg, now, now)
+            self.recorder.record_many(self._output_names, data, time.time_ns())
 
     def _start_recorder(self) -> SessionRecorder | None:
-        topics = {pub.topic_name: (_type_name(msg), self.p["qos_reliability"])
-                  for pub, msg in self._outputs}
+        topics = {pub.topic_name: (type_name, self.p["qos_reliability"])
+                  for pub, type_name in self._outputs}
         topics[self.sub_top_drive.topic_name] = ("geometry_msgs/msg/TwistStamped", "")
         topics[self.sub_hook_load.topic_name] = ("geometry_msgs/msg/WrenchStamped", "")
         g, sc = self.rig.groups, self.rig.scales
@@ -217,11 +217,12 @@ class RigNode(Node):
         self.get_logger().info(f"recording to {self.p['record']}")
         return rec
 
-    def _record_command(self, sub, msg) -> None:
+    def _record_command(self, sub, msg, six: tuple[float, ...]) -> None:
         if self.recorder is not None:
-            now = time.time_ns()
-            self.recorder.record(sub.topic_name, msg, now,
-                                 msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec)
+            stamp = msg.header.stamp
+            self.recorder.record(sub.topic_name, self._enc.command(
+                msg.header.frame_id, stamp.sec, stamp.nanosec, six), time.time_ns(),
+                stamp.sec * 1_000_000_000 + stamp.nanosec)
 
     # ---- commands ----------------------------------------------------------------------
     def _refuse(self, what: str, value: object, expected: str) -> None:
@@ -241,14 +242,18 @@ class RigNode(Node):
         return True
 
     def _on_top_drive(self, msg: TwistStamped) -> None:
-        self._record_command(self.sub_top_drive, msg)
+        t = msg.twist
+        self._record_command(self.sub_top_drive, msg, (t.linear.x, t.linear.y, t.linear.z,
+                                                        t.angular.x, t.angular.y, t.angular.z))
         value = msg.twist.angular.z
         if self._accepted(msg, value, "top-drive speed twist.angular.z",
                           "max_top_drive_speed_rad_s", "rad/s"):
             self.rig.command(value, self.rig.commanded_hook_load_n)
 
     def _on_hook_load(self, msg: WrenchStamped) -> None:
-        self._record_command(self.sub_hook_load, msg)
+        w = msg.wrench
+        self._record_command(self.sub_hook_load, msg, (w.force.x, w.force.y, w.force.z,
+                                                        w.torque.x, w.torque.y, w.torque.z))
         value = msg.wrench.force.z
         if self._accepted(msg, value, "hook load wrench.force.z", "max_hook_load_n", "N"):
             self.rig.command(self.rig.commanded_speed_rad_s, value)
@@ -382,27 +387,18 @@ class RigNode(Node):
         self.pub_diag.publish(array)
 
 
-class _Messages:
-    """Preallocated output messages, refilled every tick."""
+class _Encoders:
+    """CDR encoders of the node's messages, compiled once (frames and joint names fixed)."""
 
     def __init__(self) -> None:
-        self.bit_wrench = WrenchStamped()
-        self.bit_wrench.header.frame_id = itf.FRAME_BIT
-        self.bit_twist = TwistStamped()
-        self.bit_twist.header.frame_id = itf.FRAME_BIT
-        self.td_wrench = WrenchStamped()
-        self.td_wrench.header.frame_id = itf.FRAME_TOP_DRIVE
-        self.flag = Bool()
-        self.doc = Float64()
-        self.hole = Float64()
-        self.joints = JointState()
-        self.joints.name = list(itf.JOINT_NAMES)
-        self.clock = Clock()
-
-
-def _type_name(msg) -> str:
-    module = type(msg).__module__.split(".")[0]
-    return f"{module}/msg/{type(msg).__name__}"
+        self.bit_wrench = cdr.stamped_vectors(itf.FRAME_BIT)
+        self.bit_twist = cdr.stamped_vectors(itf.FRAME_BIT)
+        self.td_wrench = cdr.stamped_vectors(itf.FRAME_TOP_DRIVE)
+        self.flag = cdr.boolean()
+        self.float64 = cdr.float64()
+        self.joints = cdr.joint_state("", itf.JOINT_NAMES)
+        self.clock = cdr.clock()
+        self.command = cdr.StampedVectorsByFrame()
 
 
 def _read_only(description: str) -> ParameterDescriptor:

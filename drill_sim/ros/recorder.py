@@ -1,5 +1,6 @@
 """In-node recording: every topic the node publishes and every command it receives, into a
 rosbag2 MCAP bag (``drill_sim.bag.writer``), with the session's context as MCAP metadata.
+Outputs are recorded as the very bytes the node published.
 
 Recording problems (full disk, unwritable path) stop the recording with a clear error and leave
 the simulation running; the bag written so far stays readable.
@@ -11,8 +12,6 @@ import json
 import sys
 import time
 from pathlib import Path
-
-from rclpy.serialization import serialize_message
 
 from .. import __version__
 from ..bag.writer import BagError, BagWriter, qos_profile
@@ -35,18 +34,31 @@ class SessionRecorder:
         for name, (type_name, rel) in topics.items():
             self.writer.add_topic(name, type_name, [qos_profile(rel or reliability)])
 
-    def record(self, topic: str, msg, log_time_ns: int, publish_time_ns: int) -> None:
-        if self.error is not None:
-            return
-        try:
-            self.writer.write(topic, serialize_message(msg), log_time_ns, publish_time_ns)
-        except (OSError, BagError) as exc:
-            self.error = f"recording stopped: {exc}"
-            self.logger.error(self.error + "; the simulation keeps running")
+    def record(self, topic: str, data: bytes, log_time_ns: int, publish_time_ns: int) -> None:
+        """One CDR-serialized message."""
+        if self.error is None:
             try:
-                self.writer.close()
-            except (OSError, BagError):
-                pass
+                self.writer.write(topic, data, log_time_ns, publish_time_ns)
+            except (OSError, BagError) as exc:
+                self._stop(exc)
+
+    def record_many(self, topics: list[str], data: list[bytes], time_ns: int) -> None:
+        """One tick's outputs, all received and published at ``time_ns``."""
+        if self.error is None:
+            write = self.writer.write
+            try:
+                for topic, raw in zip(topics, data, strict=True):
+                    write(topic, raw, time_ns, time_ns)
+            except (OSError, BagError) as exc:
+                self._stop(exc)
+
+    def _stop(self, exc: Exception) -> None:
+        self.error = f"recording stopped: {exc}"
+        self.logger.error(self.error + "; the simulation keeps running")
+        try:
+            self.writer.close()
+        except (OSError, BagError):
+            pass
 
     def close(self) -> None:
         if self.error is None:

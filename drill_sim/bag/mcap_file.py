@@ -1,0 +1,236 @@
+"""An MCAP file writer built for message rates of tens of kHz from Python.
+
+``mcap.writer.Writer`` builds a record object per message (~15 us). Here a message is one
+struct pack appended to the open chunk, and its index entry two array appends; chunks, message
+indexes and the summary are assembled when a chunk closes or the file finishes, with the
+``mcap`` library's record classes. The file has the same layout as the library's: schemas and
+channels inside the chunk in which they first appear and again in the summary, zstd chunks
+with CRCs, a message index per channel after each chunk, statistics, chunk and metadata
+indexes, summary offsets.
+
+Compressing, writing and syncing a chunk take milliseconds; they run on one background thread
+(in order, outside the GIL for the most part), so the thread adding messages - the node's tick
+loop - never waits for the disk. An error there is raised at the next call.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+import zlib
+from array import array
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import BinaryIO
+
+import zstandard
+from mcap.data_stream import RecordBuilder
+from mcap.opcode import Opcode
+from mcap.records import (
+    Channel,
+    ChunkIndex,
+    DataEnd,
+    Footer,
+    Header,
+    Metadata,
+    MetadataIndex,
+    Schema,
+    Statistics,
+    SummaryOffset,
+)
+
+MAGIC = b"\x89MCAP0\r\n"
+_MESSAGE = struct.Struct("<BQHIQQ")            # opcode, length, channel, sequence, log, publish
+_MESSAGE_FIXED = 2 + 4 + 8 + 8
+_CHUNK_HEAD = struct.Struct("<BQQQQI")         # opcode, length, start, end, size, crc
+_INDEX_HEAD = struct.Struct("<BQHI")           # opcode, length, channel, records length
+
+
+class McapFileWriter:
+    """Write one MCAP file to ``stream`` (binary, seekable position via ``tell``)."""
+
+    def __init__(self, stream: BinaryIO, *, profile: str, library: str,
+                 chunk_size: int = 1 << 20, zstd_level: int = 3) -> None:
+        self.stream = stream
+        self.chunk_size = chunk_size
+        self._compress = zstandard.ZstdCompressor(level=zstd_level).compress
+        self._schemas: list[Schema] = []
+        self._channels: list[Channel] = []
+        self._chunk_indexes: list[ChunkIndex] = []
+        self._metadata_indexes: list[MetadataIndex] = []
+        self._counts: dict[int, int] = {}
+        self._chunk = bytearray()
+        self._times: dict[int, array] = {}
+        self._offsets: dict[int, array] = {}
+        self.message_count = 0
+        self.start_time = self.end_time = None
+        self._written = 0                      # bytes in the file, counted by the writing thread
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mcap-writer")
+        self._last: Future | None = None
+        self._write(MAGIC)
+        self._write_records(Header(profile=profile, library=library))
+
+    # ---- records -------------------------------------------------------------------------
+    def add_schema(self, name: str, encoding: str, data: bytes) -> int:
+        schema = Schema(id=len(self._schemas) + 1, name=name, encoding=encoding, data=data)
+        self._schemas.append(schema)
+        self._chunk += _encode(schema)
+        return schema.id
+
+    def add_channel(self, topic: str, message_encoding: str, schema_id: int,
+                    metadata: dict[str, str]) -> int:
+        channel = Channel(id=len(self._channels) + 1, topic=topic, schema_id=schema_id,
+                          message_encoding=message_encoding, metadata=metadata)
+        self._channels.append(channel)
+        self._chunk += _encode(channel)
+        self._times[channel.id] = array("Q")
+        self._offsets[channel.id] = array("Q")
+        self._counts[channel.id] = 0
+        return channel.id
+
+    def add_message(self, channel_id: int, sequence: int, log_time: int, publish_time: int,
+                    data: bytes) -> None:
+        """Append one message to the open chunk (closed once past ``chunk_size``)."""
+        chunk = self._chunk
+        self._times[channel_id].append(log_time)
+        self._offsets[channel_id].append(len(chunk))
+        chunk += _MESSAGE.pack(Opcode.MESSAGE, _MESSAGE_FIXED + len(data), channel_id,
+                               sequence, log_time, publish_time)
+        chunk += data
+        if len(chunk) >= self.chunk_size:
+            self.close_chunk()
+
+    def add_metadata(self, name: str, data: dict[str, str]) -> None:
+        self.close_chunk()
+        record = _encode(Metadata(name=name, metadata=data))
+        self._submit(self._write_metadata, name, record)
+
+    def _write_metadata(self, name: str, record: bytes) -> None:
+        self._metadata_indexes.append(MetadataIndex(offset=self._written, length=len(record),
+                                                    name=name))
+        self._write_now(record)
+
+    # ---- chunks --------------------------------------------------------------------------
+    def close_chunk(self) -> None:
+        """Hand the open chunk with its message indexes to the writing thread."""
+        if not any(self._times.values()):
+            return                                     # schemas and channels wait for messages
+        indexes = {k: (t, self._offsets[k]) for k, t in self._times.items() if t}
+        start = min(min(t) for t, _ in indexes.values())
+        end = max(max(t) for t, _ in indexes.values())
+        for channel_id, (times, _) in indexes.items():
+            self._counts[channel_id] += len(times)
+            self.message_count += len(times)
+            self._times[channel_id] = array("Q")
+            self._offsets[channel_id] = array("Q")
+        self.start_time = start if self.start_time is None else min(self.start_time, start)
+        self.end_time = end if self.end_time is None else max(self.end_time, end)
+        raw = bytes(self._chunk)
+        self._chunk = bytearray()
+        self._submit(self._write_chunk, raw, start, end, indexes)
+
+    def _write_chunk(self, raw: bytes, start: int, end: int,
+                     indexes: dict[int, tuple[array, array]]) -> None:
+        data = self._compress(raw)
+        compression = b"zstd"
+        chunk_start = self._written
+        self._write_now(_CHUNK_HEAD.pack(Opcode.CHUNK, 8 + 8 + 8 + 4 + 4 + len(compression) + 8
+                                         + len(data), start, end, len(raw), zlib.crc32(raw))
+                        + struct.pack("<I", len(compression)) + compression
+                        + struct.pack("<Q", len(data)))
+        self._write_now(data)
+        chunk_length = self._written - chunk_start
+        index_start = self._written
+        offsets = {}
+        for channel_id, (times, positions) in indexes.items():
+            n = len(times)
+            pairs = array("Q", bytes(16 * n))
+            pairs[0::2] = times
+            pairs[1::2] = positions
+            offsets[channel_id] = self._written
+            self._write_now(_INDEX_HEAD.pack(Opcode.MESSAGE_INDEX, 2 + 4 + 16 * n, channel_id,
+                                             16 * n) + pairs.tobytes())
+        self._chunk_indexes.append(ChunkIndex(
+            message_start_time=start, message_end_time=end, chunk_start_offset=chunk_start,
+            chunk_length=chunk_length, message_index_offsets=offsets,
+            message_index_length=self._written - index_start, compression="zstd",
+            compressed_size=len(data), uncompressed_size=len(raw)))
+
+    def sync(self) -> None:
+        """Push everything handed over so far to the disk (in the background)."""
+        self._submit(self._sync_now)
+
+    def _sync_now(self) -> None:
+        self.stream.flush()
+        os.fsync(self.stream.fileno())
+
+    @property
+    def size_bytes(self) -> int:
+        """Bytes in the file plus the open chunk (uncompressed): an estimate that lags by
+        what the writing thread has not written yet."""
+        return self._written + len(self._chunk)
+
+    # ---- the end -------------------------------------------------------------------------
+    def finish(self) -> None:
+        """Write the last chunk, the summary and the footer (the stream stays open)."""
+        self.close_chunk()
+        if self._chunk:                                  # schemas/channels with no message
+            self._write(bytes(self._chunk))
+            self._chunk = bytearray()
+        self._pool.shutdown(wait=True)
+        if self._last is not None:
+            self._last.result()                          # raise what went wrong there
+        self._write = self._write_now                    # the rest is written here
+        self._write_records(DataEnd(data_section_crc=0))
+        summary_start = self._written
+        groups = [(Opcode.SCHEMA, self._schemas), (Opcode.CHANNEL, self._channels),
+                  (Opcode.STATISTICS, [self._statistics()]),
+                  (Opcode.CHUNK_INDEX, self._chunk_indexes),
+                  (Opcode.METADATA_INDEX, self._metadata_indexes)]
+        summary = bytearray()
+        offsets = []
+        for opcode, records in groups:
+            start = len(summary)
+            for record in records:
+                summary += _encode(record)
+            offsets.append(SummaryOffset(group_opcode=opcode, group_start=summary_start + start,
+                                         group_length=len(summary) - start))
+        offset_start = summary_start + len(summary)
+        for offset in offsets:
+            summary += _encode(offset)
+        crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 20, summary_start, offset_start),
+                         zlib.crc32(summary))
+        self._write(bytes(summary))
+        self._write_records(Footer(summary_start=summary_start,
+                                   summary_offset_start=offset_start, summary_crc=crc))
+        self._write(MAGIC)
+
+    def _statistics(self) -> Statistics:
+        return Statistics(
+            message_count=self.message_count, schema_count=len(self._schemas),
+            channel_count=len(self._channels), attachment_count=0,
+            metadata_count=len(self._metadata_indexes), chunk_count=len(self._chunk_indexes),
+            message_start_time=self.start_time or 0, message_end_time=self.end_time or 0,
+            channel_message_counts={k: v for k, v in self._counts.items() if v})
+
+    def _write_records(self, *records) -> None:
+        for record in records:
+            self._write(_encode(record))
+
+    def _write(self, data: bytes) -> None:
+        self._submit(self._write_now, data)
+
+    def _write_now(self, data: bytes) -> None:
+        self.stream.write(data)
+        self._written += len(data)
+
+    def _submit(self, fn, *args) -> None:
+        last = self._last
+        if last is not None and last.done() and last.exception() is not None:
+            raise last.exception()
+        self._last = self._pool.submit(fn, *args)
+
+
+def _encode(record) -> bytes:
+    builder = RecordBuilder()
+    record.write(builder)
+    return builder.end()
