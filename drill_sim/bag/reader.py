@@ -13,10 +13,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
+from mcap.reader import SeekingReader
 from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
+from .mcap_scan import McapScan
 from .writer import BagError, bag_information, file_entry
 
 
@@ -126,31 +128,100 @@ def read_messages(path: str | Path, topics: set[str] | None = None,
     """Every readable message of the bag in file order (log-time order within a file)."""
     problems = [] if problems is None else problems
     for file in mcap_files(path):
-        for rec, topic, type_name in _walk(file, problems):
-            if isinstance(rec, Message) and (topics is None or topic in topics):
-                yield BagMessage(topic, type_name, rec.data, rec.log_time, rec.publish_time)
+        try:
+            scan = McapScan(file, problems)
+        except OSError as exc:
+            problems.append(f"{file.name}: cannot open: {exc.strerror}")
+            continue
+        with scan:
+            names, types = scan.channels.topics, scan.channels.types
+            for cid, log, pub, data in scan.messages():
+                topic = names.get(cid, "")
+                if topics is None or topic in topics:
+                    yield BagMessage(topic, types.get(cid, ""), bytes(data), log, pub)
+
+
+def topic_types(path: str | Path, problems: list[str] | None = None) -> dict[str, str]:
+    """topic -> type of every channel in the bag, from the files' summaries where they have
+    one (no message is read), else by skimming the files."""
+    problems = [] if problems is None else problems
+    found: dict[str, str] = {}
+    for file in mcap_files(path):
+        summary = _summary(file)
+        if summary is not None:
+            for ch in summary.channels.values():
+                schema = summary.schemas.get(ch.schema_id)
+                found.setdefault(ch.topic, schema.name if schema else "")
+            continue
+        with McapScan(file, problems) as scan:
+            for _ in scan.messages(channel_ids=set()):
+                pass
+            for cid, topic in scan.channels.topics.items():
+                found.setdefault(topic, scan.channels.types[cid])
+    return found
+
+
+def _summary(file: Path):
+    """The file's summary section, or None if it has none (a crashed file) or it is bad."""
+    try:
+        with open(file, "rb") as fh:
+            return SeekingReader(fh, validate_crcs=True).get_summary()
+    except Exception:                   # any damage: the caller reads the file itself
+        return None
 
 
 def info(path: str | Path) -> BagInfo:
-    """Scan the bag (all of it: a crashed file has no summary to trust)."""
+    """Topics, counts, time span and metadata records: from each file's summary where it has a
+    sound one (like ``ros2 bag info``), else by reading the whole file (a crashed file)."""
     files = mcap_files(path)
     result = BagInfo(Path(path), files)
     for file in files:
-        for rec, topic, type_name in _walk(file, result.problems):
-            if isinstance(rec, Channel):
-                result.topics.setdefault(topic, TopicInfo(
-                    topic, type_name,
-                    offered_qos_profiles=rec.metadata.get("offered_qos_profiles", "")))
-            elif isinstance(rec, Message):
-                if topic in result.topics:
-                    result.topics[topic].count += 1
-                result.start_ns = rec.log_time if result.start_ns is None \
-                    else min(result.start_ns, rec.log_time)
-                result.end_ns = rec.log_time if result.end_ns is None \
-                    else max(result.end_ns, rec.log_time)
-            elif isinstance(rec, Metadata):
-                result.metadata[rec.name] = dict(rec.metadata)
+        if not _info_from_summary(file, result):
+            _info_from_records(file, result)
     return result
+
+
+def _info_from_summary(file: Path, result: BagInfo) -> bool:
+    try:
+        with open(file, "rb") as fh:
+            reader = SeekingReader(fh, validate_crcs=True)
+            summary = reader.get_summary()
+            if summary is None or summary.statistics is None:
+                return False
+            metadata = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
+    except Exception:                   # damaged summary: read the records instead
+        return False
+    stats = summary.statistics
+    for cid, ch in summary.channels.items():
+        schema = summary.schemas.get(ch.schema_id)
+        topic = result.topics.setdefault(ch.topic, TopicInfo(
+            ch.topic, schema.name if schema else "",
+            offered_qos_profiles=ch.metadata.get("offered_qos_profiles", "")))
+        topic.count += stats.channel_message_counts.get(cid, 0)
+    if stats.message_count:
+        _span(result, stats.message_start_time)
+        _span(result, stats.message_end_time)
+    result.metadata.update(metadata)
+    return True
+
+
+def _span(result: BagInfo, t: int) -> None:
+    result.start_ns = t if result.start_ns is None else min(result.start_ns, t)
+    result.end_ns = t if result.end_ns is None else max(result.end_ns, t)
+
+
+def _info_from_records(file: Path, result: BagInfo) -> None:
+    for rec, topic, type_name in _walk(file, result.problems):
+        if isinstance(rec, Channel):
+            result.topics.setdefault(topic, TopicInfo(
+                topic, type_name,
+                offered_qos_profiles=rec.metadata.get("offered_qos_profiles", "")))
+        elif isinstance(rec, Message):
+            if topic in result.topics:
+                result.topics[topic].count += 1
+            _span(result, rec.log_time)
+        elif isinstance(rec, Metadata):
+            result.metadata[rec.name] = dict(rec.metadata)
 
 
 def repair(path: str | Path) -> BagInfo:

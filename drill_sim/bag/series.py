@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .reader import read_messages
+from .mcap_scan import McapScan
+from .reader import mcap_files, topic_types
 from .writer import BagError
 
 JOINTS = ("top_drive", "hook", "bit_rotation", "bit_axial")
@@ -117,25 +118,45 @@ def _layout(data: bytes) -> tuple[list[str], int]:
 
 def rig_series(bag: str | Path, topic: str | None = None) -> RigSeries:
     """The rig series of ``topic`` (default: the one topic ending in ``joint_states``)."""
-    blobs: dict[str, list[bytes]] = {}
-    for m in read_messages(bag):
-        if m.type_name == JOINT_STATE and (topic is None or m.topic == topic):
-            blobs.setdefault(m.topic, []).append(m.data)
-    if not blobs:
+    joint_topics = sorted(t for t, kind in topic_types(bag).items()
+                          if kind == JOINT_STATE and (topic is None or t == topic))
+    if not joint_topics:
         raise BagError(f"bag {bag}: no {JOINT_STATE} topic{'' if topic is None else ' ' + topic}"
                        " to read the rig from")
-    if len(blobs) > 1:
-        raise BagError(f"bag {bag}: several joint_states topics ({', '.join(sorted(blobs))}); "
+    if len(joint_topics) > 1:
+        raise BagError(f"bag {bag}: several joint_states topics ({', '.join(joint_topics)}); "
                        "choose one with --topic")
-    name, datas = next(iter(blobs.items()))
-    names, offset = _layout(datas[0])
+    name = joint_topics[0]
+    raw = _rows(bag, name)
+    if raw.shape[0] == 0:
+        raise BagError(f"{name}: no message in the bag")
+    names, offset = _layout(raw[0].tobytes())
     if tuple(names) != JOINTS:
         raise BagError(f"{name}: joints {names}, expected drill_sim's {list(JOINTS)}")
-    size = len(datas[0])
-    same = [d for d in datas if len(d) == size]
-    raw = np.frombuffer(b"".join(same), dtype=np.uint8).reshape(len(same), size)
     stamp = raw[:, 4:12].copy().view("<i4")
     time_s = stamp[:, 0] + 1e-9 * stamp[:, 1].view("<u4")
     # position[4], then a uint32 count (4 bytes) and 4 bytes of padding before velocity[4], ...
     f = np.ascontiguousarray(raw[:, offset:offset + 3 * 32 + 16]).view("<f8")
     return RigSeries.from_joints(name, time_s, f[:, 0:4], f[:, 5:9], f[:, 10:14])
+
+
+def _rows(bag: str | Path, topic: str) -> np.ndarray:
+    """Every message of ``topic`` as one row of bytes (messages of another size than the
+    first are left out): through the message indexes where they allow, else message by
+    message."""
+    parts: list[np.ndarray] = []
+    for file in mcap_files(bag):
+        with McapScan(file, []) as scan:
+            got = scan.fixed_size_channel(topic)
+            if got is None:
+                names = scan.channels.topics
+                datas = [bytes(d) for cid, _, _, d in scan.messages() if names.get(cid) == topic]
+                size = len(datas[0]) if datas else 0
+                datas = [d for d in datas if len(d) == size]
+                got = (None, np.frombuffer(b"".join(datas), np.uint8).reshape(len(datas), size))
+            if got[1].size:
+                parts.append(got[1])
+    if not parts:
+        return np.zeros((0, 0), np.uint8)
+    size = parts[0].shape[1]
+    return np.concatenate([p for p in parts if p.shape[1] == size])
