@@ -11,6 +11,7 @@ Run: .venv/bin/python benchmarks/bench_record.py [--rate 20000] [--seconds 10]
 from __future__ import annotations
 
 import argparse
+import itertools
 import os
 import shutil
 import signal
@@ -25,8 +26,7 @@ import rclpy
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from drill_sim.bag.reader import read_messages  # noqa: E402
+from drill_sim.bag.reader import read_messages
 
 BIN = Path(sys.executable).parent
 
@@ -76,7 +76,7 @@ def main() -> None:
     rclpy.shutdown()
     values = [struct.unpack_from("<d", m.data, 4)[0] for m in read_messages(bag)]
     missing = n - len(set(values))
-    in_order = all(b > a for a, b in zip(values, values[1:], strict=False))
+    in_order = all(b > a for a, b in itertools.pairwise(values))
     print(f"published {n} messages in {elapsed:.2f} s ({n / elapsed:.0f} msg/s); recorded "
           f"{len(values)}, lost {missing}, {'in order' if in_order else 'OUT OF ORDER'}; "
           f"recorder CPU {100 * cpu / (elapsed + 1.0):.0f} % of one core")

@@ -162,6 +162,7 @@ def main(argv: list[str] | None = None) -> int:
                 status.show(now)
                 next_discovery = now + args.discovery_period
             executor.spin_once(timeout_sec=args.discovery_period)
+        _drain(executor, writer)
     finally:
         status.close()
         executor.shutdown()
@@ -178,6 +179,17 @@ def main(argv: list[str] | None = None) -> int:
         print(f"drill_sim_record: {node.error}", file=sys.stderr)
         return 1
     return 0
+
+
+def _drain(executor: EventsExecutor, writer: BagWriter, quiet_s: float = 0.05,
+           limit_s: float = 2.0) -> None:
+    """On stop, take what has already arrived: spin until nothing comes for ``quiet_s``."""
+    end = time.monotonic() + limit_s
+    while time.monotonic() < end:
+        before = sum(t.count for t in writer.topics.values())
+        executor.spin_once(timeout_sec=quiet_s)
+        if sum(t.count for t in writer.topics.values()) == before:
+            return
 
 
 class _Status:

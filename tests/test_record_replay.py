@@ -1,0 +1,174 @@
+"""drill_sim_record and drill_sim_replay, run as installed commands in their own processes."""
+
+from __future__ import annotations
+
+import itertools
+import struct
+import subprocess
+import time
+
+import pytest
+from conftest import installed
+from geometry_msgs.msg import TwistStamped
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
+from rosbags.interfaces import QosReliability
+from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+from rosbags.typesys import Stores, get_typestore
+from rosgraph_msgs.msg import Clock
+from rosutil import NodeProcess, wait_for
+from std_msgs.msg import Float64
+
+from drill_sim.bag.writer import BagWriter, qos_profile
+
+T0 = 1_700_000_000_000_000_000
+RELIABLE = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE)
+TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+FLOAT64 = struct.Struct("<4sd")
+
+
+def _stream_bag(path, prefix: str, n: int = 2000) -> None:
+    """n numbered Float64 at 1 kHz on {prefix}/stream, a 10 Hz best-effort command beside."""
+    with BagWriter(path) as w:
+        w.add_topic(f"{prefix}/stream", "std_msgs/msg/Float64")
+        w.add_topic(f"{prefix}/cmd", "geometry_msgs/msg/TwistStamped",
+                    [qos_profile("best_effort", 5)])
+        for i in range(n):
+            t = T0 + i * 1_000_000
+            w.write(f"{prefix}/stream", FLOAT64.pack(b"\x00\x01\x00\x00", float(i)), t)
+            if i % 100 == 0:
+                w.write(f"{prefix}/cmd", serialize_message(TwistStamped()), t)
+
+
+class _Received:
+    """Numbers and arrival times from a raw Float64 subscription."""
+
+    def __init__(self, node, topic: str) -> None:
+        self.values: list[float] = []
+        self.times: list[float] = []
+        self.sub = node.create_subscription(Float64, topic, self._on, RELIABLE, raw=True)
+
+    def _on(self, data: bytes) -> None:
+        self.values.append(FLOAT64.unpack(data)[1])
+        self.times.append(time.monotonic())
+
+
+def _finish(proc: NodeProcess, timeout_s: float = 60.0) -> str:
+    """Let the player end on its own; its exit status and output."""
+    out, _ = proc.proc.communicate(timeout=timeout_s)
+    assert proc.proc.returncode == 0, out
+    return out
+
+
+@pytest.mark.parametrize("rate", [1.0, 10.0])
+def test_replay_loses_no_message_and_keeps_the_timing(ros, tmp_path, rate):
+    prefix = f"/replay_{int(rate)}x"
+    _stream_bag(tmp_path / "bag", prefix)
+    # the player starts first and must wait for the subscriber, not play into the void
+    with NodeProcess("drill_sim_replay", str(tmp_path / "bag"), "--rate", str(rate)) as player:
+        got = _Received(ros, f"{prefix}/stream")
+        wait_for(lambda: len(got.values) >= 2000 or player.proc.poll() is not None, ros, 60,
+                 "2000 replayed messages")
+        out = _finish(player)
+    wait_for(lambda: len(got.values) >= 2000, ros, 10, "the last replayed messages")
+    assert got.values == [float(i) for i in range(2000)], out
+    span = got.times[-1] - got.times[0]
+    assert span >= 0.95 * 1.999 / rate          # never ahead of the recorded timing
+    assert span < 3.0 * 1.999 / rate + 0.5      # nor far behind it
+    assert "published 2020 messages" in out
+
+
+def test_replay_start_offset_topic_filter_and_clock(ros, tmp_path):
+    _stream_bag(tmp_path / "bag", "/offset")
+    clock: list[int] = []
+    ros.create_subscription(Clock, "/clock", lambda m: clock.append(
+        m.clock.sec * 1_000_000_000 + m.clock.nanosec), 100)
+    cmds: list[object] = []
+    ros.create_subscription(TwistStamped, "/offset/cmd", cmds.append, 10)
+    with NodeProcess("drill_sim_replay", str(tmp_path / "bag"), "--rate", "4",
+                     "--start-offset", "1.0", "--topics", "/offset/stream",
+                     "--clock", "200") as player:
+        got = _Received(ros, "/offset/stream")
+        wait_for(lambda: player.proc.poll() is not None, ros, 60, "the player to finish")
+        out = _finish(player)
+    wait_for(lambda: len(got.values) >= 1000, ros, 10, "the replayed messages")
+    assert got.values == [float(i) for i in range(1000, 2000)], out
+    assert cmds == []
+    assert len(clock) >= 10
+    assert all(b >= a for a, b in itertools.pairwise(clock))
+    assert T0 + 1_000_000_000 <= clock[0] and clock[-1] <= T0 + 2_000_000_000
+
+
+def test_replay_plays_a_bag_written_by_another_tool(ros, tmp_path):
+    bag = tmp_path / "foreign"
+    with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        conn = w.add_connection("/foreign/value", "std_msgs/msg/Float64", typestore=TYPESTORE)
+        msg_type = TYPESTORE.types["std_msgs/msg/Float64"]
+        for i in range(300):
+            w.write(conn, T0 + i * 10_000_000,
+                    TYPESTORE.serialize_cdr(msg_type(data=float(i)), "std_msgs/msg/Float64"))
+    with NodeProcess("drill_sim_replay", str(bag), "--rate", "10") as player:
+        got = _Received(ros, "/foreign/value")
+        wait_for(lambda: player.proc.poll() is not None, ros, 60, "the player to finish")
+        out = _finish(player)
+    wait_for(lambda: len(got.values) >= 300, ros, 10, "the replayed messages")
+    assert got.values == [float(i) for i in range(300)], out
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["{tmp}/nowhere"], "no such file or directory"),
+    (["{tmp}/bag", "--rate", "0"], "--rate = 0.0: expected a number > 0"),
+    (["{tmp}/bag", "--rate", "nan"], "--rate = nan"),
+    (["{tmp}/bag", "--topics", "/absent"], "not in"),
+    (["{tmp}/junk.mcap"], "not a valid MCAP file"),
+])
+def test_replay_bad_input_gets_one_clear_line(tmp_path, args, expected):
+    _stream_bag(tmp_path / "bag", "/bad", n=10)
+    (tmp_path / "junk.mcap").write_bytes(b"this is no bag at all" * 10)
+    run = subprocess.run([installed("drill_sim_replay"),
+                          *(a.format(tmp=tmp_path) for a in args), "--wait-for", "0"],
+                         capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2, run.stderr
+    assert expected in run.stderr
+    assert "Traceback" not in run.stderr
+
+
+def test_record_captures_selected_topics_raw_with_their_qos(ros, tmp_path):
+    bag = tmp_path / "rec"
+    with NodeProcess("drill_sim_record", "--regex", "^/rec/", "-o", str(bag)) as rec:
+        a = ros.create_publisher(Float64, "/rec/a", RELIABLE)
+        b = ros.create_publisher(TwistStamped, "/rec/b",
+                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
+        other = ros.create_publisher(Float64, "/elsewhere", 10)
+        wait_for(lambda: a.get_subscription_count() and b.get_subscription_count(), ros, 30,
+                 "the recorder to subscribe")
+        for i in range(500):
+            a.publish(Float64(data=float(i)))
+            other.publish(Float64(data=-1.0))
+        cmd = TwistStamped()
+        cmd.twist.angular.z = 6.0
+        b.publish(cmd)
+        assert a.wait_for_all_acked()
+        code, out = rec.stop()
+    assert code == 0, out
+    with Reader(bag) as r:
+        conns = {c.topic: c for c in r.connections}
+        assert set(conns) == {"/rec/a", "/rec/b"}
+        assert conns["/rec/a"].msgcount == 500
+        assert conns["/rec/b"].msgtype == "geometry_msgs/msg/TwistStamped"
+        assert conns["/rec/b"].ext.offered_qos_profiles[0].reliability \
+            == QosReliability.BEST_EFFORT
+        values = [TYPESTORE.deserialize_cdr(raw, c.msgtype).data
+                  for c, _, raw in r.messages() if c.topic == "/rec/a"]
+    assert values == [float(i) for i in range(500)]
+
+
+def test_record_refuses_an_existing_bag_and_bad_arguments(tmp_path):
+    (tmp_path / "taken").mkdir()
+    for args, expected in ((["/x", "-o", str(tmp_path / "taken")], "already exists"),
+                           ([], "name topics, or give --regex or --all"),
+                           (["--regex", "("], "bad regular expression")):
+        run = subprocess.run([installed("drill_sim_record"), *args], capture_output=True,
+                             text=True, timeout=60)
+        assert run.returncode == 2, run.stderr
+        assert expected in run.stderr
