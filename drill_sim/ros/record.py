@@ -26,6 +26,7 @@ from rclpy.utilities import remove_ros_args
 
 from .. import __version__
 from ..bag.writer import BagError, BagWriter
+from ..cli.progress import StatusLine
 from .topics import UnknownType, message_class, profile_dict, subscription_qos
 
 
@@ -193,28 +194,24 @@ def _drain(executor: EventsExecutor, writer: BagWriter, quiet_s: float = 0.05,
 
 
 class _Status:
-    """A live line on a terminal: topics, messages, rate."""
+    """Topics, messages and rate on a terminal line, once a second."""
 
     def __init__(self, writer: BagWriter) -> None:
         self.writer = writer
-        self.enabled = sys.stderr.isatty()
+        self.line = StatusLine(1.0)
         self.last = (time.monotonic(), 0)
-        self.drawn = False
 
     def show(self, now: float) -> None:
-        if not self.enabled or now - self.last[0] < 1.0:
+        if not self.line.due():
             return
         total = sum(t.count for t in self.writer.topics.values())
-        rate = (total - self.last[1]) / (now - self.last[0])
+        rate = (total - self.last[1]) / max(now - self.last[0], 1e-9)
         self.last = (now, total)
-        sys.stderr.write(f"\rrecording {len(self.writer.topics)} topics: {total} messages, "
-                         f"{rate:8.0f} msg/s ")
-        sys.stderr.flush()
-        self.drawn = True
+        self.line.show(f"recording {len(self.writer.topics)} topics: {total} messages, "
+                       f"{rate:8.0f} msg/s ")
 
     def close(self) -> None:
-        if self.drawn:
-            sys.stderr.write("\n")
+        self.line.close()
 
 
 if __name__ == "__main__":

@@ -29,6 +29,7 @@ from ..bag import cdr
 from ..bag.mcap_scan import McapScan
 from ..bag.reader import info, mcap_files
 from ..bag.writer import BagError
+from ..cli.progress import StatusLine
 from .topics import UnknownType, message_class, profile_from_dicts
 
 
@@ -212,30 +213,20 @@ def main(argv: list[str] | None = None) -> int:
 
 
 class _Progress:
-    """Bag time on a terminal line, at most ten times a second."""
+    """Bag time on a terminal line, ten times a second."""
 
     def __init__(self, start_ns: int, end_ns: int) -> None:
         self.start, self.span = start_ns, max(end_ns - start_ns, 1)
-        self.enabled = sys.stderr.isatty()
-        self.next = 0.0
-        self.drawn = False
+        self.line = StatusLine(0.1)
 
     def __call__(self, log_ns: int) -> None:
-        if not self.enabled:
-            return
-        now = time.monotonic()
-        if now < self.next:
-            return
-        self.next = now + 0.1
-        t = (log_ns - self.start) * 1e-9
-        sys.stderr.write(f"\rreplaying: {t:9.3f} s of {self.span * 1e-9:.3f} s "
-                         f"({100 * (log_ns - self.start) / self.span:5.1f} %)")
-        sys.stderr.flush()
-        self.drawn = True
+        if self.line.due():
+            self.line.show(f"replaying: {(log_ns - self.start) * 1e-9:9.3f} s of "
+                           f"{self.span * 1e-9:.3f} s "
+                           f"({100 * (log_ns - self.start) / self.span:5.1f} %)")
 
     def close(self) -> None:
-        if self.drawn:
-            sys.stderr.write("\n")
+        self.line.close()
 
 
 if __name__ == "__main__":
