@@ -30,6 +30,25 @@ def wait_for(condition: Callable[[], bool], node: Node, timeout_s: float, what: 
         rclpy.spin_once(node, timeout_sec=0.01)
 
 
+def call_service(node: Node, srv_type, name: str, request):
+    """Call the service ``name`` once it is ready and wait for its response."""
+    client = node.create_client(srv_type, name)
+    wait_for(client.service_is_ready, node, 10.0, f"service {name}")
+    future = client.call_async(request)
+    wait_for(future.done, node, 10.0, f"the {name} response")
+    return future.result()
+
+
+def set_double(node: Node, target: str, name: str, value: float):
+    """Set the double parameter ``name`` of node ``target``; the SetParametersResult."""
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+    p = Parameter(name=name, value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE,
+                                                  double_value=value))
+    return call_service(node, SetParameters, f"{target}/set_parameters",
+                        SetParameters.Request(parameters=[p])).results[0]
+
+
 def spin_for(node: Node, seconds: float) -> None:
     end = time.monotonic() + seconds
     while time.monotonic() < end:

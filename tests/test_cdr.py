@@ -8,7 +8,7 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Bool, Float64
+from std_msgs.msg import Bool, Float64, String
 
 from drill_sim.bag import cdr
 
@@ -48,6 +48,11 @@ def test_joint_state_matches_rclpy(names):
     j.header.frame_id = "bit"
     j.header.stamp.sec = 42
     _same(cdr.joint_state("bit", names)(42, 0, j.position, j.velocity, j.effort), j)
+
+
+@pytest.mark.parametrize("text", ["", "a", "abcd", '{"event": "reset"}', "grad °"])
+def test_string_matches_rclpy(text):
+    _same(cdr.string(text), String(data=text))
 
 
 def test_scalars_match_rclpy():

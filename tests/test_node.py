@@ -8,9 +8,7 @@ import numpy as np
 import pytest
 import rclpy
 from geometry_msgs.msg import TwistStamped, WrenchStamped
-from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
-from rcl_interfaces.srv import SetParameters
-from rosutil import NodeProcess, spin_for, wait_for
+from rosutil import NodeProcess, call_service, set_double, spin_for, wait_for
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 from std_srvs.srv import SetBool, Trigger
@@ -50,11 +48,7 @@ class Client:
         self.hook.publish(h)
 
     def call(self, srv_type, name: str, request):
-        client = self.node.create_client(srv_type, f"{RIG}/{name}")
-        wait_for(client.service_is_ready, self.node, 10.0, f"service {name}")
-        future = client.call_async(request)
-        wait_for(future.done, self.node, 10.0, f"the {name} response")
-        return future.result()
+        return call_service(self.node, srv_type, f"{RIG}/{name}", request)
 
     def window(self, seconds: float) -> np.ndarray:
         """Record the bit wrench for ``seconds`` of wall time; rows (stamp, WOB, TOB)."""
@@ -158,10 +152,7 @@ def test_pause_step_and_reset(client):
 
 
 def _set(client: Client, name: str, value: float):
-    p = Parameter(name=name, value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE,
-                                                  double_value=value))
-    return client.call(SetParameters, "set_parameters",
-                       SetParameters.Request(parameters=[p])).results[0]
+    return set_double(client.node, RIG, name, value)
 
 
 def test_bad_parameters_are_refused_good_ones_applied(client):

@@ -3,20 +3,27 @@ and an unwritable path that stops recording but not the simulation."""
 
 from __future__ import annotations
 
+import json
 import signal
+import subprocess
 import time
 
 import pytest
+from conftest import installed
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import TwistStamped
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from mcap_ros2.reader import read_ros2_messages
 from rosbags.interfaces import QosReliability
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
-from rosutil import NodeProcess, spin_for, wait_for
+from rosgraph_msgs.msg import Clock
+from rosutil import NodeProcess, call_service, set_double, spin_for, wait_for
 from std_msgs.msg import Bool
+from std_srvs.srv import Trigger
 
 from drill_sim.bag import reader
+from drill_sim.bag.writer import BagWriter
+from drill_sim.core import load_preset
 
 OUTPUTS = {"/rec/drill_sim/bit/wrench", "/rec/drill_sim/bit/twist",
            "/rec/drill_sim/bit/stick_slip", "/rec/drill_sim/top_drive/wrench",
@@ -119,10 +126,6 @@ def test_recording_splits_by_duration(ros, tmp_path):
 def test_bag_metrics_export_and_plot_of_a_recorded_stick_slip_session(ros, tmp_path):
     """20 s of the base rig at 60 rpm and 100 kN, recorded at 10x real time: the bag's
     metrics show stick-slip and meet the averaged invariants <WOB> = W0, <Omega> = Omega0."""
-    import json
-    import subprocess
-
-    from conftest import installed
     bag = tmp_path / "stickslip"
     with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/ss", "-p",
                      f"record:={bag}", "-p", "real_time_factor:=10.0"):
@@ -144,3 +147,71 @@ def test_bag_metrics_export_and_plot_of_a_recorded_stick_slip_session(ros, tmp_p
     header = csv.read_text().splitlines()[0].split(",")
     assert header[0] == "time_s" and "wob_n" in header and "bit_speed_rad_s" in header
     assert png.read_bytes()[:4] == b"\x89PNG"
+    done = _resim(bag)                  # real-time mode: ticks from the wall clock
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "real-time session" in done.stdout and "reproduced exactly" in done.stdout
+
+
+def _resim(bag, *extra: str) -> subprocess.CompletedProcess:
+    return subprocess.run([installed("drill_sim"), "bag", "resim", str(bag), *extra],
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_resim_reproduces_a_sim_time_session_with_commands_reset_and_changes(ros, tmp_path):
+    """A sim-time session (/clock, back to back) with commands, a refused command, a reset and
+    a model-parameter change: the re-run equals the recording bit for bit. The same bag
+    without its events is no longer reproduced: the comparison has teeth."""
+    bag = tmp_path / "simtime"
+    weight = load_preset("base").rig.submerged_weight_n
+    clock: list[float] = []
+    ros.create_subscription(Clock, "/clock", lambda m: clock.append(
+        m.clock.sec + 1e-9 * m.clock.nanosec), 10)
+    rig = "/resim/drill_sim"
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/resim", "-p",
+                     f"record:={bag}", "-p", "publish_clock:=true", "-p", "max_speed:=true",
+                     "-p", "rate_hz:=200.0"):
+        speed = ros.create_publisher(TwistStamped, f"{rig}/cmd/top_drive", 10)
+        hook = ros.create_publisher(WrenchStamped, f"{rig}/cmd/hook_load", 10)
+        wait_for(lambda: speed.get_subscription_count() and hook.get_subscription_count(),
+                 ros, 30.0, "the rig's command subscriptions")
+
+        def at(t: float) -> None:
+            wait_for(lambda: clock and clock[-1] > t, ros, 60.0, f"simulated time {t} s")
+
+        def command(pub, msg, value) -> None:
+            msg.header.frame_id = "top_drive"
+            if isinstance(msg, TwistStamped):
+                msg.twist.angular.z = value
+            else:
+                msg.wrench.force.z = value
+            pub.publish(msg)
+
+        at(0.5)
+        command(speed, TwistStamped(), 12.0)
+        at(1.5)
+        command(hook, WrenchStamped(), weight - 60e3)
+        command(hook, WrenchStamped(), float("nan"))               # refused
+        at(2.5)
+        assert call_service(ros, Trigger, f"{rig}/reset", Trigger.Request()).success
+        at(3.5)
+        assert set_double(ros, rig, "friction_coefficient", 0.45).successful
+        command(speed, TwistStamped(), 4.0)
+        at(5.0)
+    done = _resim(bag, "--json")
+    assert done.returncode == 0, done.stdout + done.stderr
+    r = json.loads(done.stdout)
+    assert r["exact"] and r["mode"] == "sim-time" and r["samples"] > 900
+    assert (r["commands"], r["refused"]) == (3, 1)
+    assert r["events"] == ["reset", "parameters"]
+    # the same bag with its events left out: the reset and the change are missing
+    found = reader.info(bag)
+    cut = tmp_path / "no_events"
+    with BagWriter(cut, metadata=found.metadata) as w:
+        for name, t in found.topics.items():
+            w.add_topic(name, t.type_name)
+        for m in reader.read_messages(bag):
+            if not m.topic.endswith("/events"):
+                w.write(m.topic, m.data, m.log_time_ns, m.publish_time_ns)
+    done = _resim(cut)
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert "differs from the recording" in done.stdout

@@ -54,8 +54,7 @@ class Template:
         return offset, _STAMP
 
     def finish(self) -> bytearray:
-        self._align(4)                     # Fast CDR pads the end to a multiple of four
-        return self.buf
+        return self.buf                    # no end padding for types with strings or sequences
 
 
 _STAMP = struct.Struct("<iI")
@@ -84,7 +83,7 @@ def float64() -> Encoder:
 
 
 def boolean() -> Encoder:
-    """std_msgs/Bool: ``encode(flag)``."""
+    """std_msgs/Bool: ``encode(flag)`` (fixed-size types are padded to 8 bytes)."""
     pack = struct.Struct("<4s?3x").pack
     return lambda flag: pack(ENCAPSULATION, flag)
 
@@ -93,6 +92,13 @@ def clock() -> Encoder:
     """rosgraph_msgs/Clock: ``encode(sec, nanosec)``."""
     pack = struct.Struct("<4siI").pack
     return lambda sec, nanosec: pack(ENCAPSULATION, sec, nanosec)
+
+
+def string(text: str) -> bytes:
+    """std_msgs/String (any text; compiled per call, for rare messages)."""
+    t = Template()
+    t.string(text)
+    return bytes(t.finish())
 
 
 def joint_state(frame_id: str, names: Sequence[str]) -> Encoder:

@@ -11,21 +11,28 @@ from pathlib import Path
 import numpy as np
 
 from ..bag import reader
+from ..bag.resim import resimulate
 from ..bag.series import rig_series
 from ..bag.writer import BagError
 from .errors import UsageError
 from .plot import plot_rig_series
+from .progress import Progress
 
 
 def add_arguments(sub) -> None:
     bag = sub.add_parser("bag", help="tools on rosbag2 MCAP bags: info, repair, metrics, "
-                                     "export, plot")
+                                     "export, plot, resim")
     tools = bag.add_subparsers(dest="bag_command", required=True, parser_class=type(bag))
     info = tools.add_parser("info", help="topics, types, counts, duration, metadata")
     info.add_argument("bag", type=Path, help="bag directory or .mcap file")
     repair = tools.add_parser("repair", help="rewrite a bag cut short by a crash: summary, "
                                              "indexes, metadata.yaml (originals kept)")
     repair.add_argument("bag", type=Path, help="bag directory")
+    resim = tools.add_parser("resim", help="run the model again from the recorded parameters "
+                             "and commands and compare with the recorded outputs (exit 1 if "
+                             "they differ)")
+    resim.add_argument("bag", type=Path, help="bag directory or .mcap file of a rig session")
+    resim.add_argument("--json", action="store_true", help="one JSON object on stdout")
     for name, text in (("metrics", "SSI, stick fraction and means of a recorded rig session"),
                        ("export", "the rig's time series as CSV (SI columns)"),
                        ("plot", "PNG of bit speed, WOB, torques and the stick-slip flag")):
@@ -46,6 +53,8 @@ def run(args: argparse.Namespace) -> int:
             print(render(reader.info(args.bag)))
         elif args.bag_command in ("metrics", "export", "plot"):
             return _series_command(args)
+        elif args.bag_command == "resim":
+            return _resim_command(args)
         else:
             result = reader.repair(args.bag)
             print(f"repaired {args.bag}: {result.message_count} messages over "
@@ -82,6 +91,34 @@ def _series_command(args: argparse.Namespace) -> int:
         plot_rig_series(out, s, title=f"{args.bag.name}: {s.topic}")
         print(f"plot written to {out}")
     return 0
+
+
+def _resim_command(args: argparse.Namespace) -> int:
+    progress = Progress("re-simulating")
+    try:
+        r = resimulate(args.bag, progress)
+    finally:
+        progress.close()
+    if args.json:
+        print(json.dumps({"bag": str(r.bag), "mode": r.mode, "preset": r.preset,
+                          "samples": r.samples, "commands": r.commands, "refused": r.refused,
+                          "events": r.events, "exact": r.exact,
+                          "max_difference": r.max_difference,
+                          "worst": dict(zip(("quantity", "difference", "time_s"), r.worst,
+                                            strict=True)),
+                          "explanation": r.explanation()}))
+        return 0 if r.exact else 1
+    print(f"{r.bag}: {r.mode} session (preset {r.preset}), {r.samples} samples, "
+          f"{r.commands} commands used, {r.refused} refused, "
+          f"{r.events.count('reset')} resets, {r.events.count('parameters')} parameter changes")
+    print("largest difference re-run - recorded, per quantity:")
+    for name, value in r.max_difference.items():
+        print(f"  {name:<24} {value:.3g}")
+    if not r.exact:
+        name, value, t = r.worst
+        print(f"worst: {name} off by {value:.3g} at t = {t:.6f} s")
+    print(r.explanation())
+    return 0 if r.exact else 1
 
 
 def render(i: reader.BagInfo) -> str:

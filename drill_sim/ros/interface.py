@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from ..core import session
+
 NODE_NAME = "drill_sim"
 
 # inputs
@@ -31,7 +33,7 @@ SRV_STEP = "~/step"                    # std_srvs/Trigger
 
 FRAME_BIT = "bit"                      # +z downhole, at the bit
 FRAME_TOP_DRIVE = "top_drive"          # at the surface
-COMMAND_FRAMES = ("", FRAME_TOP_DRIVE)  # accepted frame_id on commands
+COMMAND_FRAMES = session.COMMAND_FRAMES  # accepted frame_id on commands
 
 JOINT_NAMES = ("top_drive", "hook", "bit_rotation", "bit_axial")
 

@@ -7,6 +7,7 @@ until the next tick; a refused command never reaches the model.
 
 from __future__ import annotations
 
+import json
 import math
 import signal
 import sys
@@ -27,10 +28,10 @@ from std_srvs.srv import SetBool, Trigger
 
 from ..bag import cdr
 from ..bag.writer import BagError
-from ..core import NoSteadyDrilling, ParameterError, Rig, load_preset
+from ..core import NoSteadyDrilling, ParameterError, load_preset, session
 from ..core.rig import RigSample
 from . import interface as itf
-from .parameters import MODEL_UNITS, rig_parameters, specs
+from .parameters import specs
 from .recorder import SessionRecorder
 
 REGIME_NAMES = {True: "stick-slip", False: "drilling"}
@@ -57,11 +58,8 @@ class RigNode(Node):
                 raise SystemExit(f"drill_sim_node: parameter {name} = {self.p[name]!r}: expected "
                                  f"one of {', '.join(spec.choices)}")
         try:
-            params = rig_parameters(self.p)
-            self.rig = Rig(params, dt_s=self.p["dt_s"],
-                           stick_window_s=self.p["stick_slip_window_s"],
-                           hoist_speed_limit_m_s=self.p["hoist_speed_limit_m_s"])
-            self._start_initial()
+            self.rig = session.make_rig(self.p)
+            session.start(self.rig, self.p)
         except (ParameterError, NoSteadyDrilling) as exc:
             raise SystemExit(f"drill_sim_node: {exc}") from None
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -98,10 +96,11 @@ class RigNode(Node):
             self._outputs.insert(0, (self.pub_clock, "rosgraph_msgs/msg/Clock"))
         self._output_names = [pub.topic_name for pub, _ in self._outputs]
         self._enc = _Encoders()
-        self.recorder = self._start_recorder() if self.p["record"] else None
+        self._events_topic = self.get_fully_qualified_name() + "/events"   # recorded only
         self._offset_s = 0.0                     # simulated time before the last reset
         self.paused = False
         self._epoch_ns = time.time_ns()          # stamps = epoch + sim time without /clock
+        self.recorder = self._start_recorder() if self.p["record"] else None
         self._anchor()
         self._tick_count = self._overruns = 0
         self._last_tick = None
@@ -194,6 +193,7 @@ class RigNode(Node):
                   for pub, type_name in self._outputs}
         topics[self.sub_top_drive.topic_name] = ("geometry_msgs/msg/TwistStamped", "")
         topics[self.sub_hook_load.topic_name] = ("geometry_msgs/msg/WrenchStamped", "")
+        topics[self._events_topic] = ("std_msgs/msg/String", "")
         g, sc = self.rig.groups, self.rig.scales
         context = {
             "parameters": {k: str(v) for k, v in sorted(self.p.items())},
@@ -203,7 +203,10 @@ class RigNode(Node):
                        "force_n": repr(sc.force_n),
                        "stiffness_nm_per_rad": repr(sc.stiffness_nm_per_rad)},
         }
-        context["session"] = {"preset": self.preset.name, "node": self.get_fully_qualified_name()}
+        context["session"] = {
+            "preset": self.preset.name, "node": self.get_fully_qualified_name(),
+            "stamp_epoch_ns": str(0 if self.pub_clock is not None else self._epoch_ns),
+            "events_topic": self._events_topic}
         try:
             rec = SessionRecorder(self.p["record"], topics,
                                   reliability=self.p["qos_reliability"], context=context,
@@ -216,6 +219,14 @@ class RigNode(Node):
             return None
         self.get_logger().info(f"recording to {self.p['record']}")
         return rec
+
+    def _record_event(self, kind: str, values: dict[str, str] | None = None) -> None:
+        """Resets and parameter changes, so a re-simulation can do them at the same point."""
+        if self.recorder is not None:
+            now = time.time_ns()
+            self.recorder.record(self._events_topic, self._enc.event(json.dumps(
+                {"event": kind, "sim_time_s": self.sim_time_s, "values": values or {}})),
+                now, now)
 
     def _record_command(self, sub, msg, six: tuple[float, ...]) -> None:
         if self.recorder is not None:
@@ -231,12 +242,9 @@ class RigNode(Node):
 
     def _accepted(self, msg, value: float, what: str, limit: str, unit: str) -> bool:
         """A command is used only if its frame is expected and its value finite and in range."""
-        if msg.header.frame_id not in itf.COMMAND_FRAMES:
-            self._refuse(f"{what} frame_id", msg.header.frame_id, "'top_drive' or empty")
-            return False
-        high = self.p[limit]
-        if not (math.isfinite(value) and 0.0 <= value <= high):
-            self._refuse(f"{what} [{unit}]", value, f"a finite value in [0, {high:g}] {unit}")
+        refusal = session.command_refusal(msg.header.frame_id, value, self.p[limit], what, unit)
+        if refusal is not None:
+            self._refuse(*refusal)
             return False
         self._cmd_wall = time.monotonic()
         return True
@@ -259,25 +267,14 @@ class RigNode(Node):
             self.rig.command(self.rig.commanded_speed_rad_s, value)
 
     # ---- services ----------------------------------------------------------------------
-    def _start_initial(self) -> None:
-        speed = self.p["initial_top_drive_speed_rad_s"]
-        hook = self.rig.params.submerged_weight_n - self.p["initial_weight_on_bit_n"]
-        if hook < 0:
-            raise ParameterError(f"initial_weight_on_bit_n = {self.p['initial_weight_on_bit_n']:g}"
-                                 f" exceeds the string's submerged weight "
-                                 f"{self.rig.params.submerged_weight_n:g} N")
-        if self.p["initial_state"] == "steady":
-            self.rig.start_steady(speed, hook)
-        else:
-            self.rig.start_at_rest(self.p["initial_gap_m"])
-
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
         offset = self._offset_s + self.rig.time_s
         try:
-            self._start_initial()
+            session.start(self.rig, self.p)
         except (ParameterError, NoSteadyDrilling) as exc:
             response.success, response.message = False, str(exc)
             return response
+        self._record_event("reset")
         self._offset_s = offset
         self._anchor()
         self._diag_sim = self.rig.time_s
@@ -319,17 +316,13 @@ class RigNode(Node):
                 return SetParametersResult(successful=False,
                                            reason=f"{param.name} = {value!r} is not finite")
             new[param.name] = value
-        changed = {k for k in new if new[k] != self.p[k]}
         try:
-            if changed & set(MODEL_UNITS):
-                self.rig.replace_parameters(rig_parameters(new))
-            if "stick_slip_window_s" in changed:
-                self.rig.set_stick_window(new["stick_slip_window_s"])
-            if "hoist_speed_limit_m_s" in changed:
-                self.rig.set_hoist_speed_limit(new["hoist_speed_limit_m_s"])
+            changed = session.apply_changes(self.rig, self.p, new)
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         self.p = new
+        if changed:
+            self._record_event("parameters", {k: str(new[k]) for k in sorted(changed)})
         if "real_time_factor" in changed:
             self._anchor()
         if "rate_hz" in changed and self.timer is not None:
@@ -399,6 +392,7 @@ class _Encoders:
         self.joints = cdr.joint_state("", itf.JOINT_NAMES)
         self.clock = cdr.clock()
         self.command = cdr.StampedVectorsByFrame()
+        self.event = cdr.string
 
 
 def _read_only(description: str) -> ParameterDescriptor:

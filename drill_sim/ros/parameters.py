@@ -4,11 +4,11 @@ at run time. Model parameters default to the chosen preset's values."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
 
-from ..core import Preset, RigParameters
+from ..core import Preset
 from ..core.simulator import DEFAULT_DT
 
 
@@ -105,7 +105,3 @@ def specs(preset: Preset) -> list[Spec]:
     ]
     return out
 
-
-def rig_parameters(values: dict[str, object]) -> RigParameters:
-    """RigParameters from parameter values (raises ParameterError naming a bad one)."""
-    return RigParameters(**{f.name: values[f.name] for f in fields(RigParameters)})

@@ -1,0 +1,176 @@
+"""Re-running a recorded rig session from its bag, and how far the re-run is from the recording.
+
+The node records its parameters (MCAP metadata), every command it received, its resets and
+run-time parameter changes (``<node>/events``) and every sample it published, in the order they
+happened. The re-run starts the same rig (``core.session``), then walks the bag in that order:
+each command is accepted or refused by the node's rules, each event is redone, and before each
+recorded joint_states sample the model is advanced to that sample's step and compared with it.
+The model is deterministic and the node only advances it between samples, so the re-run is
+exact in both modes: in sim-time mode the ticks are fixed steps of simulated time; in
+real-time mode they came from the wall clock, and the re-run takes them from the stamps.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import struct
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..core import NoSteadyDrilling, ParameterError, session
+from ..core.rig import Rig, RigSample
+from .reader import info, read_messages
+from .series import JOINT_FIELDS, _layout
+from .writer import BagError
+
+_STAMP = struct.Struct("<iI")
+_JOINT_VALUES = struct.Struct("<14d")        # position[4], count+pad, velocity[4], ..., effort[4]
+_ARRAY_START = {"position": 0, "velocity": 5, "effort": 10}
+
+
+@dataclass
+class ResimResult:
+    """What the re-run found. ``max_difference``: largest |re-run - recorded| per quantity
+    (SI units as named); ``worst``: (quantity, difference, simulated time [s])."""
+
+    bag: Path
+    mode: str                                    # "sim-time" or "real-time"
+    preset: str
+    samples: int = 0
+    commands: int = 0
+    refused: int = 0
+    events: list[str] = field(default_factory=list)
+    max_difference: dict[str, float] = field(
+        default_factory=lambda: dict.fromkeys(JOINT_FIELDS, 0.0))
+    worst: tuple[str, float, float] = ("", 0.0, 0.0)
+    problems: list[str] = field(default_factory=list)
+
+    @property
+    def exact(self) -> bool:
+        return self.samples > 0 and all(v == 0.0 for v in self.max_difference.values())
+
+    def explanation(self) -> str:
+        """Why the re-run matches or not, in words."""
+        if self.exact:
+            return ("reproduced exactly: every recorded sample equals the re-run bit for bit"
+                    + (" (real-time mode: the ticks' simulated times come from the recorded "
+                       "stamps, so wall-clock jitter does not enter)"
+                       if self.mode == "real-time" else ""))
+        why = []
+        if self.problems:
+            why.append("the bag is damaged or was cut short (" + "; ".join(self.problems) + ")")
+        why.append("messages missing from the recording (a crash, a full disk, or a recording "
+                   "that was not the node's own) leave commands, resets or parameter changes "
+                   "out of the re-run")
+        if self.mode == "real-time":
+            why.append("in real-time mode a command lands on the tick that follows its arrival "
+                       "on the wall clock; the re-run can only follow the order the bag kept")
+        return "differs from the recording; likely causes: " + "; ".join(why)
+
+
+def resimulate(bag: str | Path, progress: Callable[[float], None] | None = None
+               ) -> ResimResult:
+    """Re-run the session recorded in ``bag`` and compare it sample by sample."""
+    bag = Path(bag)
+    found = info(bag)
+    meta = found.metadata
+    if "parameters" not in meta or "node" not in meta.get("session", {}):
+        raise BagError(f"bag {bag}: no drill_sim session metadata (parameters, session); "
+                       "resim re-runs sessions the rig node recorded itself")
+    p = {k: session.parse_value(v) for k, v in meta["parameters"].items()}
+    node = meta["session"]["node"]
+    epoch_ns = int(meta["session"].get("stamp_epoch_ns", "0"))
+    topics = {"joints": f"{node}/joint_states", "speed": f"{node}/cmd/top_drive",
+              "hook": f"{node}/cmd/hook_load",
+              "events": meta["session"].get("events_topic", f"{node}/events")}
+    if topics["joints"] not in found.topics:
+        raise BagError(f"bag {bag}: no {topics['joints']} to compare with")
+    result = ResimResult(bag, "sim-time" if p.get("publish_clock") else "real-time",
+                         meta["session"].get("preset", "?"), problems=list(found.problems))
+    try:
+        rig = session.make_rig(p)
+        session.start(rig, p)
+    except (ParameterError, NoSteadyDrilling, KeyError) as exc:
+        raise BagError(f"bag {bag}: the recorded parameters do not make a rig: {exc}") from None
+    run = _Rerun(rig, p, epoch_ns, result)
+    total = max(found.topics[topics["joints"]].count, 1)
+    handlers = {topics["joints"]: run.sample, topics["speed"]: run.speed,
+                topics["hook"]: run.hook, topics["events"]: run.event}
+    for m in read_messages(bag, set(handlers), result.problems):
+        handlers[m.topic](m.data)
+        if progress is not None and m.topic == topics["joints"]:
+            progress(result.samples / total)
+    return result
+
+
+class _Rerun:
+    """The rig being re-run and the session state the node kept beside it."""
+
+    def __init__(self, rig: Rig, p: dict, epoch_ns: int, result: ResimResult) -> None:
+        self.rig, self.p, self.epoch_ns, self.result = rig, p, epoch_ns, result
+        self.offset_s = 0.0                      # simulated time before the last reset
+        self.values_at: int | None = None        # byte offset of the joint arrays
+
+    def sample(self, data: bytes) -> None:
+        if self.values_at is None:
+            self.values_at = _layout(data)[1]
+        sec, nsec = _STAMP.unpack_from(data, 4)
+        sim_time_s = (sec * 1_000_000_000 + nsec - self.epoch_ns) * 1e-9
+        step = round((sim_time_s - self.offset_s) / self.rig.dt_s)
+        ahead = step - self.rig.sim.steps
+        if ahead > 0:
+            self.rig.sim.advance(ahead)
+        recorded = _JOINT_VALUES.unpack_from(data, self.values_at)
+        self._compare(self.rig.sample(), recorded, sim_time_s)
+        self.result.samples += 1
+
+    def _compare(self, s: RigSample, recorded: tuple[float, ...], t: float) -> None:
+        r = self.result
+        for name, (kind, j) in JOINT_FIELDS.items():
+            diff = abs(getattr(s, name) - recorded[_ARRAY_START[kind] + j])
+            if not diff <= r.max_difference[name]:        # also catches NaN
+                r.max_difference[name] = diff if not math.isnan(diff) else math.inf
+                if r.max_difference[name] > r.worst[1]:
+                    r.worst = (name, r.max_difference[name], t)
+
+    def speed(self, data: bytes) -> None:
+        frame, six = _stamped_vectors(data)
+        if self._accepted(frame, six[5], "max_top_drive_speed_rad_s"):
+            self.rig.command(six[5], self.rig.commanded_hook_load_n)
+
+    def hook(self, data: bytes) -> None:
+        frame, six = _stamped_vectors(data)
+        if self._accepted(frame, six[2], "max_hook_load_n"):
+            self.rig.command(self.rig.commanded_speed_rad_s, six[2])
+
+    def _accepted(self, frame: str, value: float, limit: str) -> bool:
+        if session.command_refusal(frame, value, self.p[limit], "", "") is None:
+            self.result.commands += 1
+            return True
+        self.result.refused += 1
+        return False
+
+    def event(self, data: bytes) -> None:
+        (n,) = struct.unpack_from("<I", data, 4)
+        event = json.loads(data[8:8 + n - 1].decode("utf-8"))
+        kind = event.get("event")
+        if kind == "reset":
+            self.offset_s += self.rig.time_s
+            session.start(self.rig, self.p)
+        elif kind == "parameters":
+            new = dict(self.p)
+            new.update({k: session.parse_value(v) for k, v in event["values"].items()})
+            session.apply_changes(self.rig, self.p, new)
+            self.p = new
+        self.result.events.append(kind)
+
+
+def _stamped_vectors(data: bytes) -> tuple[str, tuple[float, ...]]:
+    """frame_id and the six float64 of a TwistStamped or WrenchStamped."""
+    (n,) = struct.unpack_from("<I", data, 12)
+    frame = data[16:16 + n - 1].decode("utf-8", "replace")
+    at = 16 + n
+    at += (-(at - 4)) % 8
+    return frame, struct.unpack_from("<6d", data, at)
