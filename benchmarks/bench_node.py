@@ -3,8 +3,9 @@
   - at 1000 Hz with every output published and one external subscriber, over --seconds:
     achieved rate [>= 99.5 % of nominal], p99 period between received samples [<= 1.2 ms],
     CPU of the node process [<= 40 % of one core];
+  - the same with the node recording everything (record:=...) [CPU added <= 10 % of one core];
   - command-to-response latency: a top-drive command published -> the first joint_states
-    sample carrying it received back [p50 <= 1.5 ms, p99 <= 3 ms];
+    sample carrying it received back [p50 <= 1.5 ms, p99 <= 3 ms], without and with recording;
   - max_speed with publish_clock: simulated seconds per wall second [>= 20].
 
 Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30]
@@ -79,9 +80,10 @@ def rate_and_cpu(node, seconds: float, record: str = "") -> float:
     return cpu
 
 
-def latency(node, samples: int = 2000) -> None:
-    proc = start("-r", "__ns:=/lat")
-    pub = node.create_publisher(TwistStamped, "/lat/drill_sim/cmd/top_drive", 10)
+def latency(node, samples: int = 2000, record: str = "") -> None:
+    ns = "/lat_rec" if record else "/lat"
+    proc = start("-r", f"__ns:={ns}", *(("-p", f"record:={record}") if record else ()))
+    pub = node.create_publisher(TwistStamped, f"{ns}/drill_sim/cmd/top_drive", 10)
     state = {"value": None, "sent": 0.0}
     lat: list[float] = []
 
@@ -90,7 +92,7 @@ def latency(node, samples: int = 2000) -> None:
             lat.append(time.perf_counter() - state["sent"])
             state["value"] = None
 
-    node.create_subscription(JointState, "/lat/drill_sim/joint_states", on_joints, 1000)
+    node.create_subscription(JointState, f"{ns}/drill_sim/joint_states", on_joints, 1000)
     while pub.get_subscription_count() == 0:
         rclpy.spin_once(node, timeout_sec=0.01)
     spin(node, 1.0)
@@ -108,8 +110,8 @@ def latency(node, samples: int = 2000) -> None:
     proc.send_signal(signal.SIGINT)
     proc.wait(timeout=20)
     ms = np.array(lat) * 1e3
-    print(f"command-to-response latency over {len(ms)} commands: p50 {np.percentile(ms, 50):.3f}"
-          f" ms, p99 {np.percentile(ms, 99):.3f} ms")
+    print(f"command-to-response latency{' while recording' if record else ''} over {len(ms)} "
+          f"commands: p50 {np.percentile(ms, 50):.3f} ms, p99 {np.percentile(ms, 99):.3f} ms")
 
 
 def max_speed(node, rate_hz: float, seconds: float = 10.0) -> None:
@@ -143,6 +145,8 @@ def main() -> None:
         recording = rate_and_cpu(node, args.seconds, record=f"{tmp}/bag")
     print(f"CPU added by in-node recording: {100 * (recording - plain):.1f} % of one core")
     latency(node)
+    with tempfile.TemporaryDirectory() as tmp:
+        latency(node, record=f"{tmp}/bag")
     max_speed(node, 1000.0)
     max_speed(node, 100.0)
     node.destroy_node()

@@ -102,11 +102,18 @@ def test_main_job_runs_node_and_driver_and_writes_summary_and_plot(tmp_path):
     png = tmp_path / "run.png"
     proc = subprocess.run([installed("drill_sim"), "run", "--scenario", "step_test",
                            "--duration", "12", "--plot", str(png)], capture_output=True,
-                          text=True, timeout=120)
+                          text=True, timeout=120, cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "hole drilled" in proc.stdout and "stick fraction" in proc.stdout
     assert "rpm" in proc.stdout and "WOB" in proc.stdout          # the live status lines
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # recorded by default; a real-time session with the driver's commands re-runs exactly
+    (bag,) = tmp_path.glob("drill_sim_session_*")
+    assert f"session recorded to {bag.name}" in proc.stdout
+    resim = run("bag", "resim", str(bag), "--json", check=False)
+    assert resim.returncode == 0, resim.stdout + resim.stderr
+    r = json.loads(resim.stdout)
+    assert r["exact"] and r["mode"] == "real-time" and r["commands"] > 50
 
 
 def test_main_job_bad_arguments():
@@ -117,9 +124,9 @@ def test_main_job_bad_arguments():
 def test_main_job_reports_a_node_that_stops_early():
     from rosutil import isolate
     isolate()
-    proc = subprocess.run([installed("drill_sim"), "run", "--duration", "20", "--ros-args",
-                           "-p", "initial_state:=sideways"], capture_output=True, text=True,
-                          timeout=120)
+    proc = subprocess.run([installed("drill_sim"), "run", "--duration", "20", "--no-record",
+                           "--ros-args", "-p", "initial_state:=sideways"], capture_output=True,
+                          text=True, timeout=120)
     assert proc.returncode == 1
     assert "stopped early with status 2" in proc.stderr and "initial_state" in proc.stderr
     assert "Traceback" not in proc.stderr + proc.stdout

@@ -99,7 +99,7 @@ def test_replay_start_offset_topic_filter_and_clock(ros, tmp_path):
     assert T0 + 1_000_000_000 <= clock[0] and clock[-1] <= T0 + 2_000_000_000
 
 
-def test_replay_plays_a_bag_written_by_another_tool(ros, tmp_path):
+def test_replay_plays_a_bag_written_by_another_tool_onto_a_remapped_topic(ros, tmp_path):
     bag = tmp_path / "foreign"
     with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as w:
         conn = w.add_connection("/foreign/value", "std_msgs/msg/Float64", typestore=TYPESTORE)
@@ -107,8 +107,9 @@ def test_replay_plays_a_bag_written_by_another_tool(ros, tmp_path):
         for i in range(300):
             w.write(conn, T0 + i * 10_000_000,
                     TYPESTORE.serialize_cdr(msg_type(data=float(i)), "std_msgs/msg/Float64"))
-    with NodeProcess("drill_sim_replay", str(bag), "--rate", "10") as player:
-        got = _Received(ros, "/foreign/value")
+    with NodeProcess("drill_sim_replay", str(bag), "--rate", "10", "--ros-args", "-r",
+                     "/foreign/value:=/foreign/renamed") as player:
+        got = _Received(ros, "/foreign/renamed")
         wait_for(lambda: player.proc.poll() is not None, ros, 60, "the player to finish")
         out = _finish(player)
     wait_for(lambda: len(got.values) >= 300, ros, 10, "the replayed messages")

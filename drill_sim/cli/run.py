@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +35,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="wall seconds to run; default: the scenario's duration")
     p.add_argument("--plot", type=Path, default=Path("drill_sim.png"),
                    help="PNG written at the end")
+    p.add_argument("--record", type=Path, default=None, metavar="BAG",
+                   help="bag directory to record the session into (default: "
+                        "drill_sim_session_<date>-<time> here)")
+    p.add_argument("--no-record", action="store_true", help="do not record the session")
     p.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, default=[],
                    help="passed on to drill_sim_node (e.g. -p rate_hz:=500.0)")
 
@@ -52,8 +57,16 @@ def run_session(args: argparse.Namespace) -> int:
         raise UsageError(f"--duration = {duration:g}: expected a positive number of seconds")
     if not args.plot.parent.exists():
         raise UsageError(f"cannot write {args.plot}: folder {args.plot.parent} does not exist")
+    bag = None if args.no_record else (args.record or Path(
+        datetime.now().strftime("drill_sim_session_%Y_%m_%d-%H_%M_%S")))
+    if bag is not None and (bag.exists() or not bag.absolute().parent.is_dir()):
+        raise UsageError(f"cannot record to {bag}: " + (
+            "it exists already; choose a new name" if bag.exists()
+            else f"folder {bag.absolute().parent} does not exist"))
     node_cmd = [executable("drill_sim_node"), "--ros-args", "-p", f"preset:={args.preset}",
-                "-p", f"initial_state:={scenario.initial_state}", *args.ros_args]
+                "-p", f"initial_state:={scenario.initial_state}",
+                *(("-p", f"record:={bag.absolute()}") if bag is not None else ()),
+                *args.ros_args]
     drive_cmd = [executable("drill_sim_drive"), args.scenario]
     env = dict(os.environ)
     procs = [subprocess.Popen(node_cmd, env=env), subprocess.Popen(drive_cmd, env=env)]
@@ -119,4 +132,7 @@ def run_session(args: argparse.Namespace) -> int:
           f"stick-slip flagged {np.mean(flags):.3f} of the time")
     plot_rig_series(args.plot, series, title=f"drill_sim run: {scenario.name} on {preset.name}")
     print(f"plot written to {args.plot}")
+    if bag is not None and bag.is_dir():
+        print(f"session recorded to {bag}: replay it with drill_sim_replay, re-run it with "
+              f"drill_sim bag resim, or see drill_sim bag info|metrics|plot")
     return 0

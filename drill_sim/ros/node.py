@@ -26,7 +26,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64
 from std_srvs.srv import SetBool, Trigger
 
-from ..bag import cdr
+from ..bag import rig_messages
 from ..bag.writer import BagError
 from ..core import NoSteadyDrilling, ParameterError, load_preset, session
 from ..core.rig import RigSample
@@ -84,18 +84,16 @@ class RigNode(Node):
         self.create_service(Trigger, itf.SRV_STEP, self._on_step)
 
         self._record_error: str | None = None
-        # outputs in publishing order; _encode_sample returns their bytes in the same order
+        # publishers in the order RigEncoders.sample returns their messages
+        pubs = (self.pub_bit_wrench, self.pub_bit_twist, self.pub_flag, self.pub_td_wrench,
+                self.pub_doc, self.pub_hole, self.pub_joints)
         self._outputs: list[tuple[object, str]] = [
-            (self.pub_bit_wrench, "geometry_msgs/msg/WrenchStamped"),
-            (self.pub_bit_twist, "geometry_msgs/msg/TwistStamped"),
-            (self.pub_flag, "std_msgs/msg/Bool"),
-            (self.pub_td_wrench, "geometry_msgs/msg/WrenchStamped"),
-            (self.pub_doc, "std_msgs/msg/Float64"), (self.pub_hole, "std_msgs/msg/Float64"),
-            (self.pub_joints, "sensor_msgs/msg/JointState")]
+            (pub, type_name) for pub, (_, type_name) in zip(pubs, rig_messages.OUTPUTS,
+                                                            strict=True)]
         if self.pub_clock is not None:
-            self._outputs.insert(0, (self.pub_clock, "rosgraph_msgs/msg/Clock"))
+            self._outputs.insert(0, (self.pub_clock, rig_messages.CLOCK[1]))
         self._output_names = [pub.topic_name for pub, _ in self._outputs]
-        self._enc = _Encoders()
+        self._enc = rig_messages.RigEncoders(with_clock=self.pub_clock is not None)
         self._events_topic = self.get_fully_qualified_name() + "/events"   # recorded only
         self._offset_s = 0.0                     # simulated time before the last reset
         self.paused = False
@@ -168,21 +166,7 @@ class RigNode(Node):
 
     def publish_sample(self, s: RigSample) -> None:
         """Encode the sample once; publish those bytes and record the very same bytes."""
-        sec, nsec = divmod(self.stamp_ns(), 1_000_000_000)
-        e = self._enc
-        data = [
-            e.bit_wrench(sec, nsec, (0.0, 0.0, s.wob_n, 0.0, 0.0, s.tob_nm)),
-            e.bit_twist(sec, nsec, (0.0, 0.0, s.rop_m_s, 0.0, 0.0, s.bit_speed_rad_s)),
-            e.flag(s.stick_slip),
-            e.td_wrench(sec, nsec, (0.0, 0.0, s.hook_load_n, 0.0, 0.0, s.surface_torque_nm)),
-            e.float64(s.depth_of_cut_m),
-            e.float64(s.hole_depth_m),
-            e.joints(sec, nsec,
-                     (s.top_drive_angle_rad, s.bit_depth_m, s.bit_angle_rad, s.hole_depth_m),
-                     (s.top_drive_speed_rad_s, s.rop_m_s, s.bit_speed_rad_s, s.rop_m_s),
-                     (s.surface_torque_nm, s.hook_load_n, s.tob_nm, s.wob_n))]
-        if self.pub_clock is not None:
-            data.insert(0, e.clock(sec, nsec))
+        data = self._enc.sample(self.stamp_ns(), s)
         for (pub, _), raw in zip(self._outputs, data, strict=True):
             pub.publish(raw)
         if self.recorder is not None:
@@ -378,21 +362,6 @@ class RigNode(Node):
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()
         self.pub_diag.publish(array)
-
-
-class _Encoders:
-    """CDR encoders of the node's messages, compiled once (frames and joint names fixed)."""
-
-    def __init__(self) -> None:
-        self.bit_wrench = cdr.stamped_vectors(itf.FRAME_BIT)
-        self.bit_twist = cdr.stamped_vectors(itf.FRAME_BIT)
-        self.td_wrench = cdr.stamped_vectors(itf.FRAME_TOP_DRIVE)
-        self.flag = cdr.boolean()
-        self.float64 = cdr.float64()
-        self.joints = cdr.joint_state("", itf.JOINT_NAMES)
-        self.clock = cdr.clock()
-        self.command = cdr.StampedVectorsByFrame()
-        self.event = cdr.string
 
 
 def _read_only(description: str) -> ParameterDescriptor:
