@@ -51,13 +51,15 @@ def test_recorded_session_is_read_by_rosbags_and_mcap_ros2(ros, tmp_path):
         for _ in range(5):
             pub.publish(msg)
             spin_for(ros, 0.1)
+        msg.header.stamp.sec = -5                  # a stamp before 1970: recorded, no crash
+        pub.publish(msg)
         spin_for(ros, 0.5)
     store = get_typestore(Stores.ROS2_JAZZY)
     with Reader(bag) as r:
         counts = {c.topic: c.msgcount for c in r.connections}
         assert OUTPUTS <= set(counts)
         assert len({counts[t] for t in OUTPUTS}) == 1 and counts["/rec/drill_sim/bit/wrench"] > 500
-        assert counts["/rec/drill_sim/cmd/top_drive"] == 5
+        assert counts["/rec/drill_sim/cmd/top_drive"] == 6
         types = {c.topic: c.msgtype for c in r.connections}
         assert types["/rec/drill_sim/joint_states"] == "sensor_msgs/msg/JointState"
         assert all(c.ext.offered_qos_profiles[0].reliability == QosReliability.RELIABLE
@@ -67,7 +69,7 @@ def test_recorded_session_is_read_by_rosbags_and_mcap_ros2(ros, tmp_path):
         assert wobs[0] == pytest.approx(100e3, rel=1e-6)            # steady start at 100 kN
         cmds = [store.deserialize_cdr(raw, c.msgtype).twist.angular.z
                 for c, _, raw in r.messages() if c.topic == "/rec/drill_sim/cmd/top_drive"]
-        assert cmds == [7.0] * 5
+        assert cmds == [7.0] * 6
     decoded = sum(1 for _ in read_ros2_messages(str(bag / "session_0.mcap")))
     assert decoded == sum(counts.values())
     meta = reader.info(bag).metadata

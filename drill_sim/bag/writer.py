@@ -18,6 +18,7 @@ import yaml
 from .mcap_file import McapFileWriter
 from .schema import message_definition, type_hash
 
+_NS_LIMIT = 1 << 64
 INFINITE = {"sec": 9223372036, "nsec": 854775807}   # rmw's "unspecified" duration
 
 
@@ -99,7 +100,13 @@ class BagWriter:
 
     def write(self, topic: str, data: bytes, log_time_ns: int,
               publish_time_ns: int | None = None) -> None:
-        """Append one CDR-serialized message (receive time ``log_time_ns``)."""
+        """Append one CDR-serialized message (receive time ``log_time_ns``). Times outside
+        0..2^64-1 ns raise ValueError and write nothing."""
+        if publish_time_ns is None:
+            publish_time_ns = log_time_ns
+        if not (0 <= log_time_ns < _NS_LIMIT and 0 <= publish_time_ns < _NS_LIMIT):
+            raise ValueError(f"bag {self.path}: {topic}: times {log_time_ns}, "
+                             f"{publish_time_ns} ns: expected 0 to 2^64-1")
         t = self.topics[topic]
         f = self._file
         if f is None:
@@ -110,8 +117,7 @@ class BagWriter:
                 or (self.split_size_bytes and f.writer.size_bytes >= self.split_size_bytes):
             f = self._split()
             f.start_ns = log_time_ns
-        f.writer.add_message(t.channel_id, t.count, log_time_ns,
-                             log_time_ns if publish_time_ns is None else publish_time_ns, data)
+        f.writer.add_message(t.channel_id, t.count, log_time_ns, publish_time_ns, data)
         t.count += 1
         now = time.monotonic()
         if now - self._last_flush >= self.flush_interval_s:

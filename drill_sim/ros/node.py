@@ -214,10 +214,11 @@ class RigNode(Node):
 
     def _record_command(self, sub, msg, six: tuple[float, ...]) -> None:
         if self.recorder is not None:
-            stamp = msg.header.stamp
+            stamp, now = msg.header.stamp, time.time_ns()
+            sent = stamp.sec * 1_000_000_000 + stamp.nanosec
             self.recorder.record(sub.topic_name, self._enc.command(
-                msg.header.frame_id, stamp.sec, stamp.nanosec, six), time.time_ns(),
-                stamp.sec * 1_000_000_000 + stamp.nanosec)
+                msg.header.frame_id, stamp.sec, stamp.nanosec, six), now,
+                sent if sent >= 0 else now)         # a stamp before 1970 cannot be a time
 
     # ---- commands ----------------------------------------------------------------------
     def _refuse(self, what: str, value: object, expected: str) -> None:
