@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import subprocess
 
+import numpy as np
 import pytest
 from conftest import installed
 from geometry_msgs.msg import TwistStamped, WrenchStamped
@@ -198,3 +199,59 @@ def test_rig_series_refuses_foreign_or_missing_joint_states(tmp_path):
     proc = subprocess.run([installed("drill_sim"), "bag", "metrics", str(bag)],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and "expected drill_sim's" in proc.stderr
+
+
+def _rig_bag(path, ticks: int, command_every: int = 0, chunk_size: int = 30_000):
+    """A bag as the node records it (same encoders), from a running rig; the samples."""
+    from drill_sim.bag.rig_messages import OUTPUTS, RigEncoders
+    from drill_sim.core import RPM, Rig, load_preset
+
+    preset = load_preset("base")
+    rig = Rig(preset.rig)
+    rig.start_steady(60 * RPM, preset.rig.submerged_weight_n - 100e3)
+    enc = RigEncoders(with_clock=False)
+    topics = [f"/drill_sim/{name}" for name, _ in OUTPUTS]
+    samples = []
+    with BagWriter(path, chunk_size=chunk_size) as w:
+        for topic, (_, type_name) in zip(topics, OUTPUTS, strict=True):
+            w.add_topic(topic, type_name)
+        w.add_topic("/drill_sim/cmd/top_drive", "geometry_msgs/msg/TwistStamped")
+        for k in range(1, ticks + 1):
+            rig.advance_to(k * 1e-3)
+            s = rig.sample()
+            samples.append(s)
+            stamp = 1_700_000_000_000_000_000 + round(s.time_s * 1e9)
+            for topic, data in zip(topics, enc.sample(stamp, s), strict=True):
+                w.write(topic, data, stamp)
+            if command_every and k % command_every == 0:
+                w.write("/drill_sim/cmd/top_drive", serialize_message(TwistStamped()), stamp)
+    return samples
+
+
+@pytest.mark.parametrize("command_every", [0, 7])   # messages at a regular stride, or not
+def test_rig_series_through_the_indexes_equals_the_samples_and_survives_a_cut(tmp_path,
+                                                                              command_every):
+    from drill_sim.bag.series import JOINT_FIELDS, rig_series
+
+    bag = tmp_path / "rig"
+    samples = _rig_bag(bag, 3000, command_every)
+    series = rig_series(bag)
+    assert series.time_s.size == 3000
+    for name in JOINT_FIELDS:
+        assert np.array_equal(getattr(series, name), [getattr(s, name) for s in samples]), name
+    # a crash right after a chunk, before its message indexes: that chunk is walked instead
+    from drill_sim.bag.mcap_scan import OP_CHUNK, OP_MESSAGE_INDEX, McapScan
+
+    path = bag / "rig_0.mcap"
+    with McapScan(path, []) as scan:
+        records = list(scan.records())
+    third_chunk_end = [end for op, _, end in records if op == OP_CHUNK][2]
+    index_start = min(start - 9 for op, start, _ in records
+                      if op == OP_MESSAGE_INDEX and start > third_chunk_end)
+    data = path.read_bytes()
+    for cut_at in (index_start, len(data) // 2):       # ... and a cut inside a chunk
+        path.write_bytes(data[:cut_at])
+        cut = rig_series(bag)
+        n = cut.time_s.size
+        assert 100 < n < 3000
+        assert np.array_equal(cut.wob_n, [s.wob_n for s in samples[:n]])

@@ -12,12 +12,14 @@ from __future__ import annotations
 
 import mmap
 import struct
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import zstandard
+from numpy.lib.stride_tricks import as_strided
 
 OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK, OP_MESSAGE_INDEX = 0x03, 0x04, 0x05, 0x06, 0x07
 OP_FOOTER, OP_DATA_END = 0x02, 0x0F
@@ -116,8 +118,9 @@ class McapScan:
             yield op, start, end
             pos = end
 
-    def chunk_records(self, start: int, end: int) -> memoryview | None:
-        """The decompressed records of the chunk whose body is [start, end)."""
+    def chunk_records(self, start: int, end: int, decompressor=None) -> memoryview | None:
+        """The decompressed records of the chunk whose body is [start, end) (pass a
+        decompressor of its own from another thread)."""
         v = self.view
         _, _, size, _ = _CHUNK.unpack_from(v, start)
         compression, pos = _string(v, start + _CHUNK.size)
@@ -129,7 +132,9 @@ class McapScan:
         payload = v[pos:pos + n]
         try:
             if compression == "zstd":
-                return memoryview(self._decompress(payload, max_output_size=size))
+                decompress = self._decompress if decompressor is None \
+                    else decompressor.decompress
+                return memoryview(decompress(payload, max_output_size=size))
             if compression == "":
                 return payload
             if compression == "lz4":
@@ -178,12 +183,15 @@ class McapScan:
             elif op == OP_CHANNEL:
                 self.channels.read_channel(records[start:pos])
 
-    def fixed_size_channel(self, topic: str) -> tuple[np.ndarray, np.ndarray] | None:
-        """Every message of ``topic`` as (log times [ns], rows of bytes), cut out of each chunk
-        at once through the message index that follows it. None if the topic's messages differ
-        in size (the caller then walks the messages)."""
-        times, rows = [], []
-        chunk: memoryview | None = None
+    def fixed_size_channel(self, topic: str, convert: Callable[[np.ndarray], np.ndarray],
+                           workers: int = 2) -> np.ndarray | None:
+        """Every message of ``topic``, cut out of each chunk at once through the message index
+        that follows it as rows of bytes, passed through ``convert`` (rows -> 2-D array) and
+        stacked. Chunks are decompressed, cut and converted on ``workers`` threads (zstd and
+        numpy let go of the GIL). None if the topic's messages differ in size or a chunk has
+        no index: the caller then walks the messages."""
+        jobs: list[tuple[int, int, np.ndarray]] = []
+        chunk: tuple[int, int] | None = None
         target: int | None = None
         unindexed = False                    # a chunk with no message index after it
         for op, start, end in self.records():
@@ -191,27 +199,22 @@ class McapScan:
             if op == OP_CHUNK:
                 if unindexed:
                     return None
-                chunk = self.chunk_records(start, end)
-                if chunk is None:
-                    break
-                unindexed = True
+                chunk, unindexed = (start, end), True
                 if target is None:                      # channel records live in the chunks
-                    for _ in self._inner(chunk, set()):
+                    records = self.chunk_records(start, end)
+                    if records is None:
+                        break
+                    for _ in self._inner(records, set()):
                         pass
                     target = next((c for c, t in self.channels.topics.items() if t == topic),
                                   None)
             elif op == OP_MESSAGE_INDEX and chunk is not None:
                 unindexed = False
                 (cid,) = _U16.unpack_from(v, start)
-                if cid != target:
-                    continue
-                (n,) = _U32.unpack_from(v, start + 2)
-                pairs = np.frombuffer(v[start + 6:start + 6 + n], dtype="<u8").reshape(-1, 2)
-                got = _cut(np.frombuffer(chunk, dtype=np.uint8), pairs[:, 1])
-                if got is None:
-                    return None
-                times.append(pairs[:, 0].copy())
-                rows.append(got)
+                if cid == target:
+                    (n,) = _U32.unpack_from(v, start + 2)
+                    jobs.append((*chunk, np.frombuffer(v[start + 6:start + 6 + n],
+                                                       dtype="<u8").reshape(-1, 2)))
             elif op == OP_MESSAGE:
                 return None                              # messages outside chunks: walk them
             elif op == OP_CHANNEL:
@@ -220,20 +223,39 @@ class McapScan:
                 self.channels.read_schema(v[start:end])
         if unindexed:
             return None
-        if not rows:
-            return np.zeros(0, np.uint64), np.zeros((0, 0), np.uint8)
-        if len({r.shape[1] for r in rows}) > 1:
+        def job(chunk_start: int, chunk_end: int, pairs: np.ndarray) -> np.ndarray | None:
+            records = self.chunk_records(chunk_start, chunk_end, zstandard.ZstdDecompressor())
+            rows = None if records is None else _cut(np.frombuffer(records, np.uint8),
+                                                     pairs[:, 1])
+            return None if rows is None else (rows.shape[1], convert(rows))
+
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            parts = list(pool.map(lambda j: job(*j), jobs))
+        if any(p is None for p in parts) or len({size for size, _ in parts}) > 1:
             return None
-        return np.concatenate(times), np.concatenate(rows)
+        return np.concatenate([a for _, a in parts]) if parts else None
 
 
 def _cut(chunk: np.ndarray, offsets: np.ndarray) -> np.ndarray | None:
-    """Rows of message payloads at ``offsets`` in a chunk, if they all have one size."""
+    """Rows of message payloads at ``offsets`` in a chunk, if they all have one size. Messages
+    at a regular stride (a fixed set of topics per tick) are cut with one strided view."""
     if offsets.size == 0:
         return np.zeros((0, 0), np.uint8)
-    offsets = offsets.astype(np.int64)
-    lengths = chunk[offsets[:, None] + np.arange(1, 9)].copy().view("<u8")[:, 0]
-    if np.any(lengths != lengths[0]) or offsets[-1] + 9 + int(lengths[0]) > chunk.size:
+    o = offsets.astype(np.int64)
+    steps = np.diff(o)
+    stride = int(steps[0]) if steps.size else 1
+    regular = stride > 0 and bool(np.all(steps == stride))
+    if o[0] < 0 or o[-1] + _MESSAGE_HEAD > chunk.size:
+        return None
+    if regular:
+        lengths = as_strided(chunk[o[0] + 1:], shape=(o.size, 8), strides=(stride, 1))
+    else:
+        lengths = chunk[o[:, None] + np.arange(1, 9)]
+    lengths = lengths.copy().view("<u8")[:, 0]
+    if np.any(lengths != lengths[0]) or o[-1] + 9 + int(lengths[0]) > chunk.size:
         return None
     size = int(lengths[0]) - _MESSAGE.size
-    return chunk[offsets[:, None] + _MESSAGE_HEAD + np.arange(size)]
+    if regular:
+        return as_strided(chunk[o[0] + _MESSAGE_HEAD:], shape=(o.size, size),
+                          strides=(stride, 1)).copy()
+    return chunk[o[:, None] + _MESSAGE_HEAD + np.arange(size)]

@@ -127,36 +127,34 @@ def rig_series(bag: str | Path, topic: str | None = None) -> RigSeries:
         raise BagError(f"bag {bag}: several joint_states topics ({', '.join(joint_topics)}); "
                        "choose one with --topic")
     name = joint_topics[0]
-    raw = _rows(bag, name)
-    if raw.shape[0] == 0:
-        raise BagError(f"{name}: no message in the bag")
-    names, offset = _layout(raw[0].tobytes())
-    if tuple(names) != JOINTS:
-        raise BagError(f"{name}: joints {names}, expected drill_sim's {list(JOINTS)}")
-    stamp = raw[:, 4:12].copy().view("<i4")
-    time_s = stamp[:, 0] + 1e-9 * stamp[:, 1].view("<u4")
-    # position[4], then a uint32 count (4 bytes) and 4 bytes of padding before velocity[4], ...
-    f = np.ascontiguousarray(raw[:, offset:offset + 3 * 32 + 16]).view("<f8")
-    return RigSeries.from_joints(name, time_s, f[:, 0:4], f[:, 5:9], f[:, 10:14])
-
-
-def _rows(bag: str | Path, topic: str) -> np.ndarray:
-    """Every message of ``topic`` as one row of bytes (messages of another size than the
-    first are left out): through the message indexes where they allow, else message by
-    message."""
-    parts: list[np.ndarray] = []
+    parts = []
     for file in mcap_files(bag):
         with McapScan(file, []) as scan:
-            got = scan.fixed_size_channel(topic)
-            if got is None:
+            values = scan.fixed_size_channel(name, _decode)
+            if values is None:                  # no index or sizes differ: message by message
                 names = scan.channels.topics
-                datas = [bytes(d) for cid, _, _, d in scan.messages() if names.get(cid) == topic]
-                size = len(datas[0]) if datas else 0
-                datas = [d for d in datas if len(d) == size]
-                got = (None, np.frombuffer(b"".join(datas), np.uint8).reshape(len(datas), size))
-            if got[1].size:
-                parts.append(got[1])
+                datas = [bytes(d) for cid, _, _, d in scan.messages() if names.get(cid) == name]
+                same = [d for d in datas if len(d) == len(datas[0])]
+                values = _decode(np.frombuffer(b"".join(same), np.uint8).reshape(
+                    len(same), -1)) if same else None
+            if values is not None and values.size:
+                parts.append(values)
     if not parts:
-        return np.zeros((0, 0), np.uint8)
-    size = parts[0].shape[1]
-    return np.concatenate([p for p in parts if p.shape[1] == size])
+        raise BagError(f"{name}: no message in the bag")
+    v = np.concatenate(parts)
+    return RigSeries.from_joints(name, v[:, 0], v[:, 1:5], v[:, 5:9], v[:, 9:13])
+
+
+def _decode(rows: np.ndarray) -> np.ndarray:
+    """(N, 13) float64 from N joint_states messages of one layout: stamp [s], position[4],
+    velocity[4], effort[4] in the order of JOINTS."""
+    names, offset = _layout(rows[0].tobytes())
+    if tuple(names) != JOINTS:
+        raise BagError(f"joint_states with joints {names}, expected drill_sim's {list(JOINTS)}")
+    stamp = np.ascontiguousarray(rows[:, 4:12]).view("<i4")
+    out = np.empty((rows.shape[0], 13))
+    out[:, 0] = stamp[:, 0] + 1e-9 * stamp[:, 1].view("<u4")
+    # position[4], then a uint32 count (4 bytes) and 4 bytes of padding before velocity[4], ...
+    f = np.ascontiguousarray(rows[:, offset:offset + 3 * 32 + 16]).view("<f8")
+    out[:, 1:5], out[:, 5:9], out[:, 9:13] = f[:, 0:4], f[:, 5:9], f[:, 10:14]
+    return out
