@@ -172,6 +172,13 @@ def test_foreign_and_corrupt_input_get_clear_messages(tmp_path):
     proc = subprocess.run([installed("drill_sim"), "bag", "info", str(tmp_path / "missing")],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and "no such file" in proc.stderr
+    foreign = tmp_path / "foreign"
+    _write(foreign, n=20)                     # a bag, but not a session the rig node recorded
+    for bag, expected in ((foreign, "no drill_sim session metadata"), (junk, "no drill_sim")):
+        proc = subprocess.run([installed("drill_sim"), "bag", "resim", str(bag)],
+                              capture_output=True, text=True, timeout=60)
+        assert proc.returncode == 2 and expected in proc.stderr, proc.stderr
+        assert "Traceback" not in proc.stderr
 
 
 @pytest.mark.parametrize("position", [0.02, 0.25, 0.5, 0.75, 0.97])

@@ -121,6 +121,7 @@ def test_replay_plays_a_bag_written_by_another_tool_onto_a_remapped_topic(ros, t
     (["{tmp}/bag", "--rate", "0"], "--rate = 0.0: expected a number > 0"),
     (["{tmp}/bag", "--rate", "nan"], "--rate = nan"),
     (["{tmp}/bag", "--topics", "/absent"], "not in"),
+    (["{tmp}/bag", "--start-offset", "5"], "past the bag's end"),
     (["{tmp}/junk.mcap"], "not a valid MCAP file"),
 ])
 def test_replay_bad_input_gets_one_clear_line(tmp_path, args, expected):

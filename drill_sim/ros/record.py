@@ -22,6 +22,7 @@ import rclpy
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
 from rclpy.utilities import remove_ros_args
 
 from .. import __version__
@@ -155,6 +156,7 @@ def main(argv: list[str] | None = None) -> int:
     status = _Status(writer)
     end = time.monotonic() + args.duration if args.duration else float("inf")
     next_discovery = 0.0
+    never = Future()
     try:
         while not stop and node.error is None and time.monotonic() < end:
             now = time.monotonic()
@@ -162,7 +164,8 @@ def main(argv: list[str] | None = None) -> int:
                 node.discover()
                 status.show(now)
                 next_discovery = now + args.discovery_period
-            executor.spin_once(timeout_sec=args.discovery_period)
+            # many messages per call, dispatched in C++ (spin_once returns after each one)
+            executor.spin_until_future_complete(never, timeout_sec=args.discovery_period)
         _drain(executor, writer)
     finally:
         status.close()

@@ -60,19 +60,21 @@ class Player(Node):
         self.sent = 0
 
     # ---- before: subscribers -----------------------------------------------------------
-    def wait_for_subscribers(self, stop: list[int]) -> bool:
+    def wait_for_subscribers(self, stop: list[int]) -> str | None:
         """Until every subscription the graph knows on our topics has matched, and at least
-        ``--wait-for`` have; False if ``--wait-timeout`` passed first."""
+        ``--wait-for`` have; None then, or what was missing when ``--wait-timeout`` passed."""
         end = time.monotonic() + self.args.wait_timeout
         while not stop:
             matched = sum(p.get_subscription_count() for p in self.publishers_by_topic.values())
             known = sum(self.count_subscribers(t) for t in self.publishers_by_topic)
             if matched >= self.args.wait_for and matched >= known:
-                return True
+                return None
             if time.monotonic() >= end:
-                return False
+                return (f"{matched} subscriptions matched of {max(known, self.args.wait_for)} "
+                        f"waited for after {self.args.wait_timeout:g} s (a subscription "
+                        "asking for more than the recorded QoS offers never matches)")
             time.sleep(0.01)
-        return False
+        return None
 
     # ---- playing -----------------------------------------------------------------------
     def play_once(self, stop: list[int], progress) -> None:
@@ -180,6 +182,10 @@ def main(argv: list[str] | None = None) -> int:
     if not topics or found.start_ns is None:
         print(f"drill_sim_replay: {bag}: no message to replay", file=sys.stderr)
         return 2
+    if args.start_offset > found.duration_s:
+        print(f"drill_sim_replay: --start-offset = {args.start_offset:g} s is past the bag's "
+              f"end ({found.duration_s:.3f} s)", file=sys.stderr)
+        return 2
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     stop: list[int] = []
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -193,11 +199,11 @@ def main(argv: list[str] | None = None) -> int:
         names = ", ".join(sorted(player.publishers_by_topic))
         print(f"drill_sim_replay: {bag}: {len(player.publishers_by_topic)} topics ({names}), "
               f"{found.duration_s:.3f} s at {args.rate:g}x", file=sys.stderr)
-        if args.wait_for and not player.wait_for_subscribers(stop):
-            if stop:
-                return 0
-            print(f"drill_sim_replay: no subscriber after {args.wait_timeout:g} s; playing "
-                  "anyway", file=sys.stderr)
+        missing = player.wait_for_subscribers(stop) if args.wait_for else None
+        if stop:
+            return 0
+        if missing:
+            print(f"drill_sim_replay: {missing}; playing anyway", file=sys.stderr)
         progress = _Progress(found.start_ns, found.end_ns)
         while not stop:
             player.play_once(stop, progress)
