@@ -7,6 +7,7 @@ import subprocess
 
 import numpy as np
 import pytest
+from bagutil import rig_bag
 from conftest import installed
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from mcap_ros2.reader import read_ros2_messages
@@ -208,40 +209,13 @@ def test_rig_series_refuses_foreign_or_missing_joint_states(tmp_path):
     assert proc.returncode == 2 and "expected drill_sim's" in proc.stderr
 
 
-def _rig_bag(path, ticks: int, command_every: int = 0, chunk_size: int = 30_000):
-    """A bag as the node records it (same encoders), from a running rig; the samples."""
-    from drill_sim.bag.rig_messages import OUTPUTS, RigEncoders
-    from drill_sim.core import RPM, Rig, load_preset
-
-    preset = load_preset("base")
-    rig = Rig(preset.rig)
-    rig.start_steady(60 * RPM, preset.rig.submerged_weight_n - 100e3)
-    enc = RigEncoders(with_clock=False)
-    topics = [f"/drill_sim/{name}" for name, _ in OUTPUTS]
-    samples = []
-    with BagWriter(path, chunk_size=chunk_size) as w:
-        for topic, (_, type_name) in zip(topics, OUTPUTS, strict=True):
-            w.add_topic(topic, type_name)
-        w.add_topic("/drill_sim/cmd/top_drive", "geometry_msgs/msg/TwistStamped")
-        for k in range(1, ticks + 1):
-            rig.advance_to(k * 1e-3)
-            s = rig.sample()
-            samples.append(s)
-            stamp = 1_700_000_000_000_000_000 + round(s.time_s * 1e9)
-            for topic, data in zip(topics, enc.sample(stamp, s), strict=True):
-                w.write(topic, data, stamp)
-            if command_every and k % command_every == 0:
-                w.write("/drill_sim/cmd/top_drive", serialize_message(TwistStamped()), stamp)
-    return samples
-
-
 @pytest.mark.parametrize("command_every", [0, 7])   # messages at a regular stride, or not
 def test_rig_series_through_the_indexes_equals_the_samples_and_survives_a_cut(tmp_path,
                                                                               command_every):
     from drill_sim.bag.series import JOINT_FIELDS, rig_series
 
     bag = tmp_path / "rig"
-    samples = _rig_bag(bag, 3000, command_every)
+    samples = rig_bag(bag, 3000, command_every=command_every)
     series = rig_series(bag)
     assert series.time_s.size == 3000
     for name in JOINT_FIELDS:

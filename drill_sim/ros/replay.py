@@ -60,14 +60,20 @@ class Player(Node):
         self.sent = 0
 
     # ---- before: subscribers -----------------------------------------------------------
-    def wait_for_subscribers(self, stop: list[int]) -> str | None:
-        """Until every subscription the graph knows on our topics has matched, and at least
-        ``--wait-for`` have; None then, or what was missing when ``--wait-timeout`` passed."""
+    def wait_for_subscribers(self, stop: list[int], settle_s: float = 0.25) -> str | None:
+        """Until every subscription the graph knows on our topics has matched, at least
+        ``--wait-for`` have, and no new one has appeared for ``settle_s`` (a recorder
+        subscribes to several topics at once, and they are discovered one by one); None
+        then, or what was missing when ``--wait-timeout`` passed."""
         end = time.monotonic() + self.args.wait_timeout
+        last, changed = None, time.monotonic()
         while not stop:
             matched = sum(p.get_subscription_count() for p in self.publishers_by_topic.values())
             known = sum(self.count_subscribers(t) for t in self.publishers_by_topic)
-            if matched >= self.args.wait_for and matched >= known:
+            if (matched, known) != last:
+                last, changed = (matched, known), time.monotonic()
+            if matched >= self.args.wait_for and matched >= known \
+                    and time.monotonic() - changed >= settle_s:
                 return None
             if time.monotonic() >= end:
                 return (f"{matched} subscriptions matched of {max(known, self.args.wait_for)} "

@@ -1,0 +1,39 @@
+"""Bags made for tests: a rig session written as the node records it."""
+
+from __future__ import annotations
+
+from geometry_msgs.msg import TwistStamped
+from rclpy.serialization import serialize_message
+
+from drill_sim.bag.rig_messages import OUTPUTS, RigEncoders
+from drill_sim.bag.writer import BagWriter
+from drill_sim.core import RPM, Rig, RigSample, load_preset
+
+T0_NS = 1_700_000_000_000_000_000
+
+
+def rig_bag(path, ticks: int, *, prefix: str = "/drill_sim", command_every: int = 0,
+            chunk_size: int = 30_000, rate_hz: float = 1000.0) -> list[RigSample]:
+    """A bag as the node records it (same encoders, same writer) from the base rig in
+    stick-slip, ``ticks`` ticks at ``rate_hz``; a top-drive command every ``command_every``
+    ticks if given. Returns the samples written."""
+    preset = load_preset("base")
+    rig = Rig(preset.rig)
+    rig.start_steady(60 * RPM, preset.rig.submerged_weight_n - 100e3)
+    enc = RigEncoders(with_clock=False)
+    topics = [f"{prefix}/{name}" for name, _ in OUTPUTS]
+    samples = []
+    with BagWriter(path, chunk_size=chunk_size) as w:
+        for topic, (_, type_name) in zip(topics, OUTPUTS, strict=True):
+            w.add_topic(topic, type_name)
+        w.add_topic(f"{prefix}/cmd/top_drive", "geometry_msgs/msg/TwistStamped")
+        for k in range(1, ticks + 1):
+            rig.advance_to(k / rate_hz)
+            s = rig.sample()
+            samples.append(s)
+            stamp = T0_NS + round(s.time_s * 1e9)
+            for topic, data in zip(topics, enc.sample(stamp, s), strict=True):
+                w.write(topic, data, stamp)
+            if command_every and k % command_every == 0:
+                w.write(f"{prefix}/cmd/top_drive", serialize_message(TwistStamped()), stamp)
+    return samples
