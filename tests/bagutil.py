@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from geometry_msgs.msg import TwistStamped
 from rclpy.serialization import serialize_message
 
@@ -16,14 +18,15 @@ def rig_bag(path, ticks: int, *, prefix: str = "/drill_sim", command_every: int 
             chunk_size: int = 30_000, rate_hz: float = 1000.0) -> list[RigSample]:
     """A bag as the node records it (same encoders, same writer) from the base rig in
     stick-slip, ``ticks`` ticks at ``rate_hz``; a top-drive command every ``command_every``
-    ticks if given. Returns the samples written."""
+    ticks if given. Chunks close by size only, so their boundaries do not depend on the
+    machine's speed. Returns the samples written."""
     preset = load_preset("base")
     rig = Rig(preset.rig)
     rig.start_steady(60 * RPM, preset.rig.submerged_weight_n - 100e3)
     enc = RigEncoders(with_clock=False)
     topics = [f"{prefix}/{name}" for name, _ in OUTPUTS]
     samples = []
-    with BagWriter(path, chunk_size=chunk_size) as w:
+    with BagWriter(path, chunk_size=chunk_size, flush_interval_s=math.inf) as w:  # by size only
         for topic, (_, type_name) in zip(topics, OUTPUTS, strict=True):
             w.add_topic(topic, type_name)
         w.add_topic(f"{prefix}/cmd/top_drive", "geometry_msgs/msg/TwistStamped")
