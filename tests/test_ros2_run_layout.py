@@ -32,7 +32,8 @@ def test_colcon_build_and_ros2_run_lookup(tmp_path):
     assert Path(found) == prefix
     exe = Path(found) / "lib" / "drill_sim" / "drill_sim_node"
     assert exe.is_file() and os.access(exe, os.X_OK)
-    assert (Path(found) / "lib" / "drill_sim" / "drill_sim_drive").is_file()
+    for name in ("drill_sim_drive", "drill_sim_record", "drill_sim_replay"):
+        assert (Path(found) / "lib" / "drill_sim" / name).is_file(), name
     assert (prefix / "share" / "drill_sim" / "package.xml").is_file()
     assert (prefix / "share" / "drill_sim" / "config" / "drill_sim.yaml").is_file()
     # run it the way ros2 run would, from the install space

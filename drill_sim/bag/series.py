@@ -15,9 +15,10 @@ import numpy as np
 
 from .mcap_scan import McapScan
 from .reader import mcap_files, topic_types
+from .rig_messages import JOINT_NAMES
 from .writer import BagError
 
-JOINTS = ("top_drive", "hook", "bit_rotation", "bit_axial")
+JOINTS = JOINT_NAMES
 JOINT_STATE = "sensor_msgs/msg/JointState"
 # where each quantity sits in the node's joint_states (msg_docs/node.md): (array, joint index)
 JOINT_FIELDS = {
