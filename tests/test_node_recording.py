@@ -18,6 +18,7 @@ from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 from rosgraph_msgs.msg import Clock
 from rosutil import NodeProcess, call_service, set_double, spin_for, wait_for
+from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
 
@@ -198,7 +199,11 @@ def test_resim_reproduces_a_sim_time_session_with_commands_reset_and_changes(ros
         at(3.5)
         assert set_double(ros, rig, "friction_coefficient", 0.45).successful
         command(speed, TwistStamped(), 4.0)
-        at(5.0)
+        speeds: list[float] = []
+        ros.create_subscription(JointState, f"{rig}/joint_states",
+                                lambda m: speeds.append(m.velocity[0]), 100)
+        wait_for(lambda: speeds and speeds[-1] == 4.0, ros, 30.0, "the last command applied")
+        at(max(5.0, clock[-1] + 0.5))
     done = _resim(bag, "--json")
     assert done.returncode == 0, done.stdout + done.stderr
     r = json.loads(done.stdout)

@@ -64,6 +64,7 @@ class McapFileWriter:
         self.message_count = 0
         self.start_time = self.end_time = None
         self._written = 0                      # bytes in the file, counted by the writing thread
+        self._handed = self._done = 0          # chunk bytes handed over / done (one writer each)
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mcap-writer")
         self._last: Future | None = None
         self._write(MAGIC)
@@ -126,6 +127,7 @@ class McapFileWriter:
         self.end_time = end if self.end_time is None else max(self.end_time, end)
         raw = bytes(self._chunk)
         self._chunk = bytearray()
+        self._handed += len(raw)
         self._submit(self._write_chunk, raw, start, end, indexes)
 
     def _write_chunk(self, raw: bytes, start: int, end: int,
@@ -154,6 +156,7 @@ class McapFileWriter:
             chunk_length=chunk_length, message_index_offsets=offsets,
             message_index_length=self._written - index_start, compression="zstd",
             compressed_size=len(data), uncompressed_size=len(raw)))
+        self._done += len(raw)
 
     def sync(self) -> None:
         """Push everything handed over so far to the disk (in the background)."""
@@ -165,9 +168,10 @@ class McapFileWriter:
 
     @property
     def size_bytes(self) -> int:
-        """Bytes in the file plus the open chunk (uncompressed): an estimate that lags by
-        what the writing thread has not written yet."""
-        return self._written + len(self._chunk)
+        """Bytes in the file, plus chunks not yet written and the open chunk counted
+        uncompressed: an estimate that errs high, never behind however busy the writing
+        thread is."""
+        return self._written + (self._handed - self._done) + len(self._chunk)
 
     # ---- the end -------------------------------------------------------------------------
     def finish(self) -> None:
