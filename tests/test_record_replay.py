@@ -11,6 +11,7 @@ import pytest
 from bagutil import rig_bag
 from conftest import installed
 from geometry_msgs.msg import TwistStamped
+from rclpy.duration import Duration
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
 from rosbags.interfaces import QosReliability
@@ -176,7 +177,7 @@ def test_record_captures_selected_topics_raw_with_their_qos(ros, tmp_path):
         cmd = TwistStamped()
         cmd.twist.angular.z = 6.0
         b.publish(cmd)
-        assert a.wait_for_all_acked()
+        assert a.wait_for_all_acked(Duration(seconds=30))
         code, out = rec.stop()
     assert code == 0, out
     with Reader(bag) as r:

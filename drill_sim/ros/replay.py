@@ -216,7 +216,7 @@ def main(argv: list[str] | None = None) -> int:
             if not args.loop:
                 break
         progress.close()
-        player.wait_acked(5.0)
+        player.wait_acked(10.0)
         print(f"drill_sim_replay: published {player.sent} messages", file=sys.stderr)
     finally:
         player.destroy_node()
