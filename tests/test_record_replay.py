@@ -149,7 +149,7 @@ def test_replay_plays_a_bag_written_by_another_tool_onto_a_remapped_topic(ros, t
     (["{tmp}/bag", "--rate", "nan"], "--rate = nan"),
     (["{tmp}/bag", "--topics", "/absent"], "not in"),
     (["{tmp}/bag", "--start-offset", "5"], "past the bag's end"),
-    (["{tmp}/junk.mcap"], "not a valid MCAP file"),
+    (["{tmp}/junk.mcap"], "not an MCAP file"),
 ])
 def test_replay_bad_input_gets_one_clear_line(tmp_path, args, expected):
     _stream_bag(tmp_path / "bag", "/bad", n=10)

@@ -23,7 +23,7 @@ import zstandard
 from numpy.lib.stride_tricks import as_strided
 
 OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK, OP_MESSAGE_INDEX = 0x03, 0x04, 0x05, 0x06, 0x07
-OP_FOOTER = 0x02
+OP_FOOTER, OP_METADATA = 0x02, 0x0C
 MAGIC = b"\x89MCAP0\r\n"
 _RECORD = struct.Struct("<BQ")
 _MESSAGE = struct.Struct("<HIQQ")
@@ -32,39 +32,69 @@ _U16, _U32, _U64 = struct.Struct("<H"), struct.Struct("<I"), struct.Struct("<Q")
 _MESSAGE_HEAD = 1 + 8 + _MESSAGE.size              # opcode, length, fixed message fields
 
 
+@dataclass(frozen=True)
+class SchemaRecord:
+    id: int
+    name: str
+    encoding: str
+    data: bytes
+
+
+@dataclass(frozen=True)
+class ChannelRecord:
+    id: int
+    schema_id: int
+    topic: str
+    message_encoding: str
+    metadata: dict[str, str]
+
+
 @dataclass
 class Channels:
-    """Schemas and channels seen so far: id -> topic and id -> type name."""
+    """Schemas and channels seen so far: id -> topic and id -> type name, and the records."""
 
-    schemas: dict[int, str] = field(default_factory=dict)
+    schemas: dict[int, SchemaRecord] = field(default_factory=dict)
+    records: dict[int, ChannelRecord] = field(default_factory=dict)
     topics: dict[int, str] = field(default_factory=dict)
     types: dict[int, str] = field(default_factory=dict)
-    metadata: dict[int, dict[str, str]] = field(default_factory=dict)
 
     def read_schema(self, body: memoryview) -> None:
         (sid,) = _U16.unpack_from(body, 0)
-        name, _ = _string(body, 2)
-        self.schemas[sid] = name
+        name, pos = _string(body, 2)
+        encoding, pos = _string(body, pos)
+        (n,) = _U32.unpack_from(body, pos)
+        if pos + 4 + n > len(body):
+            raise ValueError(f"schema {name!r} longer than its record")
+        self.schemas[sid] = SchemaRecord(sid, name, encoding, bytes(body[pos + 4:pos + 4 + n]))
 
     def read_channel(self, body: memoryview) -> None:
         cid, sid = struct.unpack_from("<HH", body, 0)
         topic, pos = _string(body, 4)
-        _, pos = _string(body, pos)                    # message encoding
-        (length,) = _U32.unpack_from(body, pos)
-        pos += 4
-        end = pos + length
-        meta = {}
-        while pos < end:
-            key, pos = _string(body, pos)
-            value, pos = _string(body, pos)
-            meta[key] = value
+        encoding, pos = _string(body, pos)
+        meta = _map(body, pos)[0]
+        self.records[cid] = ChannelRecord(cid, sid, topic, encoding, meta)
         self.topics[cid] = topic
-        self.types[cid] = self.schemas.get(sid, "")
-        self.metadata[cid] = meta
+        schema = self.schemas.get(sid)
+        self.types[cid] = schema.name if schema else ""
+
+
+def _map(buf: memoryview, pos: int) -> tuple[dict[str, str], int]:
+    (length,) = _U32.unpack_from(buf, pos)
+    pos += 4
+    end = pos + length
+    if end > len(buf):
+        raise ValueError("map longer than its record")
+    out = {}
+    while pos < end:
+        key, pos = _string(buf, pos)
+        out[key], pos = _string(buf, pos)
+    return out, pos
 
 
 def _string(buf: memoryview, pos: int) -> tuple[str, int]:
     (n,) = _U32.unpack_from(buf, pos)
+    if pos + 4 + n > len(buf):
+        raise ValueError("string longer than its record")
     return bytes(buf[pos + 4:pos + 4 + n]).decode("utf-8", "replace"), pos + 4 + n
 
 
@@ -75,6 +105,7 @@ class McapScan:
         self.path = Path(path)
         self.problems = problems
         self.channels = Channels()
+        self.metadata: dict[str, dict[str, str]] = {}     # metadata records met on the walk
         self._file = open(self.path, "rb")
         size = self.path.stat().st_size
         self.data = mmap.mmap(self._file.fileno(), 0, access=mmap.ACCESS_READ) if size \
@@ -157,24 +188,27 @@ class McapScan:
         """(channel id, log time, publish time, data) of every message in file order; schemas
         and channels are collected into ``self.channels`` on the way."""
         ch = self.channels
-        for op, start, end in self.records():
-            if op == OP_CHUNK:
-                records = self.chunk_records(start, end)
-                if records is None:
-                    return
-                try:
+        start = 0
+        try:
+            for op, start, end in self.records():
+                if op == OP_CHUNK:
+                    records = self.chunk_records(start, end)
+                    if records is None:
+                        return
                     yield from self._inner(records, channel_ids)
-                except (struct.error, ValueError) as exc:   # a record that runs past the chunk
-                    self._problem(start, f"bad record inside a chunk: {exc}")
-                    return
-            elif op == OP_MESSAGE:
-                cid, _, log, pub = _MESSAGE.unpack_from(self.view, start)
-                if channel_ids is None or cid in channel_ids:
-                    yield cid, log, pub, self.view[start + _MESSAGE.size:end]
-            elif op == OP_SCHEMA:
-                ch.read_schema(self.view[start:end])
-            elif op == OP_CHANNEL:
-                ch.read_channel(self.view[start:end])
+                elif op == OP_MESSAGE:
+                    cid, _, log, pub = _MESSAGE.unpack_from(self.view, start)
+                    if channel_ids is None or cid in channel_ids:
+                        yield cid, log, pub, self.view[start + _MESSAGE.size:end]
+                elif op == OP_SCHEMA:
+                    ch.read_schema(self.view[start:end])
+                elif op == OP_CHANNEL:
+                    ch.read_channel(self.view[start:end])
+                elif op == OP_METADATA:
+                    name, pos = _string(self.view, start)
+                    self.metadata[name] = _map(self.view, pos)[0]
+        except (struct.error, ValueError) as exc:       # a record that contradicts itself
+            self._problem(start, f"bad record: {exc}")
 
     def _inner(self, records: memoryview, channel_ids: set[int] | None
                ) -> Iterator[tuple[int, int, int, memoryview]]:
@@ -210,7 +244,11 @@ class McapScan:
             return None
 
         def job(chunk_start: int, chunk_end: int, pairs: np.ndarray) -> np.ndarray | None:
-            records = self.chunk_records(chunk_start, chunk_end, zstandard.ZstdDecompressor())
+            try:
+                records = self.chunk_records(chunk_start, chunk_end,
+                                             zstandard.ZstdDecompressor())
+            except (struct.error, ValueError):
+                return None                              # a damaged chunk header
             rows = None if records is None else _cut(np.frombuffer(records, np.uint8),
                                                      pairs[:, 1])
             return None if rows is None else (rows.shape[1], convert(rows))

@@ -1,23 +1,21 @@
 """Reading rosbag2 MCAP bags (a bag directory or a bare ``.mcap``), tolerant of damage.
 
-Files are read record by record, so a file cut short by a crash yields every message before
-the cut; what could not be read is reported in ``BagInfo.problems`` rather than raised.
-``repair`` rewrites such a bag whole: summary, indexes and ``metadata.yaml``.
+Files are walked record by record (``mcap_scan``: memory-mapped, each chunk's CRC checked), so
+a file cut short by a crash yields every message before the cut; what could not be read is
+reported in ``BagInfo.problems`` rather than raised. ``info`` takes a sound file's summary
+instead of walking it. ``repair`` rewrites a bag whole: summary, indexes and ``metadata.yaml``.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
 from mcap.reader import SeekingReader
-from mcap.records import Channel, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader
-from mcap.writer import CompressionType, Writer
 
+from .mcap_file import McapFileWriter
 from .mcap_scan import McapScan
 from .writer import BagError, bag_information, file_entry
 
@@ -85,42 +83,6 @@ def mcap_files(path: str | Path) -> list[Path]:
 def _file_index(p: Path) -> tuple[int, str]:
     stem = p.stem.rsplit("_", 1)
     return (int(stem[1]) if len(stem) == 2 and stem[1].isdigit() else 0, p.name)
-
-
-def _records(path: Path, problems: list[str]) -> Iterator[object]:
-    try:
-        fh = open(path, "rb")
-    except OSError as exc:
-        problems.append(f"{path.name}: cannot open: {exc.strerror}")
-        return
-    with fh:
-        reader = StreamReader(fh, skip_magic=False, validate_crcs=True)
-        try:
-            yield from reader.records
-        except Exception as exc:
-            # (McapError, struct.error, zstd errors, ...) ends the readable part of the file
-            where = fh.tell()
-            size = os.fstat(fh.fileno()).st_size
-            problems.append(f"{path.name}: unreadable from about byte {where} of {size} "
-                            f"({type(exc).__name__}: {exc}); everything before was read")
-
-
-def _walk(path: Path, problems: list[str]) -> Iterator[tuple[object, str, str]]:
-    """Each readable record of one file with the topic and type it belongs to: set for channels
-    and messages (from the schemas and channels seen before them), empty otherwise."""
-    schemas: dict[int, str] = {}
-    channels: dict[int, tuple[str, str]] = {}
-    for rec in _records(path, problems):
-        if isinstance(rec, Schema):
-            schemas[rec.id] = rec.name
-            yield rec, "", rec.name
-        elif isinstance(rec, Channel):
-            channels[rec.id] = (rec.topic, schemas.get(rec.schema_id, ""))
-            yield (rec, *channels[rec.id])
-        elif isinstance(rec, Message):
-            yield (rec, *channels.get(rec.channel_id, ("", "")))
-        else:
-            yield rec, "", ""
 
 
 def read_messages(path: str | Path, topics: set[str] | None = None,
@@ -211,17 +173,25 @@ def _span(result: BagInfo, t: int) -> None:
 
 
 def _info_from_records(file: Path, result: BagInfo) -> None:
-    for rec, topic, type_name in _walk(file, result.problems):
-        if isinstance(rec, Channel):
-            result.topics.setdefault(topic, TopicInfo(
-                topic, type_name,
-                offered_qos_profiles=rec.metadata.get("offered_qos_profiles", "")))
-        elif isinstance(rec, Message):
-            if topic in result.topics:
-                result.topics[topic].count += 1
-            _span(result, rec.log_time)
-        elif isinstance(rec, Metadata):
-            result.metadata[rec.name] = dict(rec.metadata)
+    """Count by walking the file (fast path, CRC-checked chunks) up to any damage."""
+    counts: dict[int, int] = {}
+    start = end = None
+    with McapScan(file, result.problems) as scan:
+        for cid, log, _, _ in scan.messages():
+            counts[cid] = counts.get(cid, 0) + 1
+            if start is None or log < start:
+                start = log
+            if end is None or log > end:
+                end = log
+        for cid, ch in scan.channels.records.items():
+            topic = result.topics.setdefault(ch.topic, TopicInfo(
+                ch.topic, scan.channels.types[cid],
+                offered_qos_profiles=ch.metadata.get("offered_qos_profiles", "")))
+            topic.count += counts.get(cid, 0)
+        result.metadata.update(scan.metadata)
+    if start is not None:
+        _span(result, start)
+        _span(result, end)
 
 
 def repair(path: str | Path) -> BagInfo:
@@ -245,30 +215,35 @@ def _rewrite(source: Path, target: Path, topics: dict[str, dict]) -> dict:
     """Copy every readable record of ``source`` into a complete MCAP file ``target``; count
     messages per topic into ``topics``; return the file's metadata.yaml entry."""
     schema_ids: dict[int, int] = {}
-    channel_ids: dict[int, int] = {}
-    count, start, end = 0, None, 0
-    with open(target, "wb") as out:
-        writer = Writer(out, compression=CompressionType.ZSTD)
-        writer.start(profile="ros2", library="drill_sim repair")
-        for rec, topic, type_name in _walk(source, []):
-            if isinstance(rec, Schema):
-                schema_ids[rec.id] = writer.register_schema(rec.name, rec.encoding, rec.data)
-            elif isinstance(rec, Channel):
-                channel_ids[rec.id] = writer.register_channel(
-                    topic, rec.message_encoding, schema_ids.get(rec.schema_id, 0),
-                    dict(rec.metadata))
-                topics.setdefault(topic, {
-                    "name": topic, "type": type_name,
+    channel_ids: dict[int, tuple[int, str]] = {}
+    sequence: dict[int, int] = {}
+    with open(target, "wb") as out, McapScan(source, []) as scan:
+        writer = McapFileWriter(out, profile="ros2", library="drill_sim repair")
+        ch = scan.channels
+        for cid, log, pub, data in scan.messages():
+            if cid not in channel_ids:
+                rec = ch.records.get(cid)
+                if rec is None:
+                    continue                        # a message of a channel never declared
+                schema = ch.schemas.get(rec.schema_id)
+                if schema is not None and rec.schema_id not in schema_ids:
+                    schema_ids[rec.schema_id] = writer.add_schema(schema.name, schema.encoding,
+                                                                  schema.data)
+                channel_ids[cid] = (writer.add_channel(
+                    rec.topic, rec.message_encoding, schema_ids.get(rec.schema_id, 0),
+                    dict(rec.metadata)), rec.topic)
+                topics.setdefault(rec.topic, {
+                    "name": rec.topic, "type": ch.types.get(cid, ""),
                     "qos": yaml.safe_load(rec.metadata.get("offered_qos_profiles", "")) or [],
                     "hash": rec.metadata.get("topic_type_hash", ""), "count": 0})
-            elif isinstance(rec, Message) and rec.channel_id in channel_ids:
-                writer.add_message(channel_ids[rec.channel_id], rec.log_time, rec.data,
-                                   rec.publish_time, rec.sequence)
-                topics[topic]["count"] += 1
-                count += 1
-                start = rec.log_time if start is None else min(start, rec.log_time)
-                end = max(end, rec.log_time)
-            elif isinstance(rec, Metadata) and rec.name != "rosbag2":
-                writer.add_metadata(rec.name, dict(rec.metadata))
+            new_id, topic = channel_ids[cid]
+            writer.add_message(new_id, sequence.get(cid, 0), log, pub, bytes(data))
+            sequence[cid] = sequence.get(cid, 0) + 1
+            topics[topic]["count"] += 1
+        writer.close_chunk()
+        for name, data in scan.metadata.items():
+            if name != "rosbag2":
+                writer.add_metadata(name, data)
         writer.finish()
-    return file_entry(target.name, start, end, count)
+    return file_entry(target.name, writer.start_time, writer.end_time or 0,
+                      writer.message_count)
