@@ -37,10 +37,6 @@ def message_class(type_name: str) -> type:
         raise UnknownType(f"message type '{type_name}' is not installed here") from None
 
 
-def type_name_of(cls: type) -> str:
-    return f"{cls.__module__.split('.')[0]}/msg/{cls.__name__}"
-
-
 def profile_dict(qos: QoSProfile) -> dict:
     """One rclpy profile as a rosbag2 metadata (version 9) QoS entry."""
     return qos_profile(
