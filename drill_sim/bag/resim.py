@@ -22,12 +22,11 @@ from pathlib import Path
 from ..core import NoSteadyDrilling, ParameterError, session
 from ..core.rig import Rig, RigSample
 from .reader import info, read_messages
-from .series import JOINT_FIELDS, _layout
+from .series import JOINT_ARRAY_START, JOINT_FIELDS, JOINT_VALUES_F64, joint_state_layout
 from .writer import BagError
 
 _STAMP = struct.Struct("<iI")
-_JOINT_VALUES = struct.Struct("<14d")        # position[4], count+pad, velocity[4], ..., effort[4]
-_ARRAY_START = {"position": 0, "velocity": 5, "effort": 10}
+_JOINT_VALUES = struct.Struct(f"<{JOINT_VALUES_F64}d")
 
 
 @dataclass
@@ -115,7 +114,7 @@ class _Rerun:
 
     def sample(self, data: bytes) -> None:
         if self.values_at is None:
-            self.values_at = _layout(data)[1]
+            self.values_at = joint_state_layout(data)[1]
         sec, nsec = _STAMP.unpack_from(data, 4)
         sim_time_s = (sec * 1_000_000_000 + nsec - self.epoch_ns) * 1e-9
         step = round((sim_time_s - self.offset_s) / self.rig.dt_s)
@@ -129,7 +128,7 @@ class _Rerun:
     def _compare(self, s: RigSample, recorded: tuple[float, ...], t: float) -> None:
         r = self.result
         for name, (kind, j) in JOINT_FIELDS.items():
-            diff = abs(getattr(s, name) - recorded[_ARRAY_START[kind] + j])
+            diff = abs(getattr(s, name) - recorded[JOINT_ARRAY_START[kind] + j])
             if not diff <= r.max_difference[name]:        # also catches NaN
                 r.max_difference[name] = diff if not math.isnan(diff) else math.inf
                 if r.max_difference[name] > r.worst[1]:

@@ -18,7 +18,6 @@ from .reader import mcap_files, topic_types
 from .rig_messages import JOINT_NAMES
 from .writer import BagError
 
-JOINTS = JOINT_NAMES
 JOINT_STATE = "sensor_msgs/msg/JointState"
 # where each quantity sits in the node's joint_states (msg_docs/node.md): (array, joint index)
 JOINT_FIELDS = {
@@ -27,6 +26,10 @@ JOINT_FIELDS = {
     "bit_speed_rad_s": ("velocity", 2), "tob_nm": ("effort", 2),
     "hole_depth_m": ("position", 3), "rop_m_s": ("velocity", 3), "wob_n": ("effort", 3),
 }
+# From the position array on, the rig's joint_states is 14 float64 slots: position[4], then a
+# uint32 count and 4 bytes of padding (one slot), velocity[4], another slot, effort[4].
+JOINT_VALUES_F64 = 14
+JOINT_ARRAY_START = {"position": 0, "velocity": 5, "effort": 10}
 
 
 @dataclass(frozen=True)
@@ -48,7 +51,7 @@ class RigSeries:
     @classmethod
     def from_joints(cls, topic: str, time_s: np.ndarray, position: np.ndarray,
                     velocity: np.ndarray, effort: np.ndarray) -> RigSeries:
-        """From (N, 4) joint arrays in the order of JOINTS."""
+        """From (N, 4) joint arrays in the order of JOINT_NAMES."""
         arrays = {"position": position, "velocity": velocity, "effort": effort}
         return cls(topic, np.asarray(time_s, float), **{
             name: np.ascontiguousarray(arrays[kind][:, j]) for name, (kind, j)
@@ -93,7 +96,7 @@ _FIELDS = ("time_s", "top_drive_speed_rad_s", "surface_torque_nm", "hook_load_n"
            "bit_speed_rad_s", "tob_nm", "hole_depth_m", "rop_m_s", "wob_n")
 
 
-def _layout(data: bytes) -> tuple[list[str], int]:
+def joint_state_layout(data: bytes) -> tuple[list[str], int]:
     """Joint names and the byte offset of the position array in one JointState message."""
     def align(pos: int, n: int) -> int:
         body = pos - 4                          # alignment counts from after the 4-byte header
@@ -148,14 +151,16 @@ def rig_series(bag: str | Path, topic: str | None = None) -> RigSeries:
 
 def _decode(rows: np.ndarray) -> np.ndarray:
     """(N, 13) float64 from N joint_states messages of one layout: stamp [s], position[4],
-    velocity[4], effort[4] in the order of JOINTS."""
-    names, offset = _layout(rows[0].tobytes())
-    if tuple(names) != JOINTS:
-        raise BagError(f"joint_states with joints {names}, expected drill_sim's {list(JOINTS)}")
+    velocity[4], effort[4] in the order of JOINT_NAMES."""
+    names, offset = joint_state_layout(rows[0].tobytes())
+    if tuple(names) != JOINT_NAMES:
+        raise BagError(f"joint_states with joints {names}, expected drill_sim's "
+                       f"{list(JOINT_NAMES)}")
     stamp = np.ascontiguousarray(rows[:, 4:12]).view("<i4")
     out = np.empty((rows.shape[0], 13))
     out[:, 0] = stamp[:, 0] + 1e-9 * stamp[:, 1].view("<u4")
-    # position[4], then a uint32 count (4 bytes) and 4 bytes of padding before velocity[4], ...
-    f = np.ascontiguousarray(rows[:, offset:offset + 3 * 32 + 16]).view("<f8")
-    out[:, 1:5], out[:, 5:9], out[:, 9:13] = f[:, 0:4], f[:, 5:9], f[:, 10:14]
+    f = np.ascontiguousarray(rows[:, offset:offset + 8 * JOINT_VALUES_F64]).view("<f8")
+    for k, kind in enumerate(("position", "velocity", "effort")):
+        at = JOINT_ARRAY_START[kind]
+        out[:, 1 + 4 * k:5 + 4 * k] = f[:, at:at + 4]
     return out

@@ -8,7 +8,6 @@ from __future__ import annotations
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from ..bag import rig_messages
-from ..core import session
 
 NODE_NAME = "drill_sim"
 
@@ -32,11 +31,9 @@ SRV_RESET = "~/reset"                  # std_srvs/Trigger
 SRV_PAUSE = "~/pause"                  # std_srvs/SetBool
 SRV_STEP = "~/step"                    # std_srvs/Trigger
 
-FRAME_BIT = rig_messages.FRAME_BIT      # "bit": +z downhole, at the bit
-FRAME_TOP_DRIVE = rig_messages.FRAME_TOP_DRIVE   # "top_drive": at the surface
-COMMAND_FRAMES = session.COMMAND_FRAMES  # accepted frame_id on commands
-
-JOINT_NAMES = rig_messages.JOINT_NAMES  # top_drive, hook, bit_rotation, bit_axial
+# frames ("bit": +z downhole at the bit; "top_drive": at the surface) and joint names live in
+# bag.rig_messages, the frames accepted on commands in core.session
+FRAME_TOP_DRIVE = rig_messages.FRAME_TOP_DRIVE
 
 
 def qos(reliability: str, depth: int = 10) -> QoSProfile:

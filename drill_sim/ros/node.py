@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import math
-import signal
 import sys
 import time
 
@@ -20,7 +19,6 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
-from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64
@@ -33,6 +31,7 @@ from ..core.rig import RigSample
 from . import interface as itf
 from .parameters import specs
 from .recorder import SessionRecorder
+from .stopping import init_stoppable
 
 REGIME_NAMES = {True: "stick-slip", False: "drilling"}
 
@@ -370,12 +369,9 @@ def _read_only(description: str) -> ParameterDescriptor:
 
 
 def main(args: list[str] | None = None) -> int:
-    # Our own SIGINT/SIGTERM handlers only raise a flag, so the node always stops between two
-    # ticks: no tick is cut in half (published but not recorded, or recorded in part).
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    stop: list[int] = []
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda signum, frame: stop.append(signum))
+    # SIGINT/SIGTERM only raise a flag, so the node always stops between two ticks: no tick
+    # is cut in half (published but not recorded, or recorded in part).
+    stop = init_stoppable(args)
     node = executor = None
     try:
         node = RigNode()

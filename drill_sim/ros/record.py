@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import json
 import re
-import signal
 import sys
 import time
 from datetime import datetime
@@ -21,13 +20,13 @@ from pathlib import Path
 import rclpy
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
-from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 from rclpy.utilities import remove_ros_args
 
 from .. import __version__
 from ..bag.writer import BagError, BagWriter
 from ..cli.progress import StatusLine
+from .stopping import init_stoppable
 from .topics import UnknownType, message_class, profile_dict, subscription_qos
 
 
@@ -145,10 +144,7 @@ def main(argv: list[str] | None = None) -> int:
     except BagError as exc:
         print(f"drill_sim_record: {exc}", file=sys.stderr)
         return 2
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop: list[int] = []
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda signum, frame: stop.append(signum))
+    stop = init_stoppable(argv)
     node = TopicRecorder(writer, TopicSelection(args.topics, args.regex, args.all, args.exclude),
                          args.queue_depth)
     executor = EventsExecutor()

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import signal
 import sys
 import time
 from pathlib import Path
@@ -21,7 +20,6 @@ import yaml
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
-from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock
 
@@ -30,6 +28,7 @@ from ..bag.mcap_scan import McapScan
 from ..bag.reader import info, mcap_files
 from ..bag.writer import BagError
 from ..cli.progress import StatusLine
+from .stopping import init_stoppable
 from .topics import UnknownType, message_class, profile_from_dicts
 
 
@@ -192,10 +191,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"drill_sim_replay: --start-offset = {args.start_offset:g} s is past the bag's "
               f"end ({found.duration_s:.3f} s)", file=sys.stderr)
         return 2
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
-    stop: list[int] = []
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda signum, frame: stop.append(signum))
+    stop = init_stoppable(argv)
     player = Player(bag, topics, found.start_ns, args)
     try:
         if not player.publishers_by_topic:
