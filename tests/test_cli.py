@@ -116,9 +116,16 @@ def test_main_job_runs_node_and_driver_and_writes_summary_and_plot(tmp_path):
     assert r["exact"] and r["mode"] == "real-time" and r["commands"] > 50
 
 
-def test_main_job_bad_arguments():
+def test_main_job_bad_arguments(tmp_path):
     proc = run("run", "--scenario", "nowhere", check=False)
     assert proc.returncode == 2 and "scenario" in proc.stderr and "Traceback" not in proc.stderr
+    (tmp_path / "taken").mkdir()
+    for bag, expected in ((tmp_path / "taken", "it exists already"),
+                          (tmp_path / "no" / "such", "does not exist")):
+        proc = run("run", "--record", str(bag), check=False)
+        assert proc.returncode == 2 and expected in proc.stderr, proc.stderr
+        assert "Traceback" not in proc.stderr
+    assert list((tmp_path / "taken").iterdir()) == []          # nothing written into it
 
 
 def test_main_job_reports_a_node_that_stops_early():
