@@ -23,7 +23,7 @@ FIRST_STEP = (
     "p = load_preset('base'); rig = Rig(p.rig)\n"
     "rig.start_steady(p.top_drive_speed_rad_s, p.hook_load_n)\n"
     "rig.advance_to(rig.dt_s)\n"
-    "print('stepped', rig.sim.steps)\n"
+    "print('stepped', rig.steps)\n"
 )
 
 
@@ -36,7 +36,7 @@ def steps_per_second(steps: int = 20_000_000, repeats: int = 5) -> tuple[float, 
     best = float("inf")
     for _ in range(repeats):
         t0 = time.perf_counter()
-        rig.sim.advance(steps)
+        rig.advance_steps(steps)
         best = min(best, time.perf_counter() - t0)
     stick = rig.metrics()["stick_fraction"]
     return steps / best, steps * rig.dt_s / best, stick

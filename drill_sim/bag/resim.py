@@ -118,9 +118,9 @@ class _Rerun:
         sec, nsec = _STAMP.unpack_from(data, 4)
         sim_time_s = (sec * 1_000_000_000 + nsec - self.epoch_ns) * 1e-9
         step = round((sim_time_s - self.offset_s) / self.rig.dt_s)
-        ahead = step - self.rig.sim.steps
+        ahead = step - self.rig.steps
         if ahead > 0:
-            self.rig.sim.advance(ahead)
+            self.rig.advance_steps(ahead)
         recorded = _JOINT_VALUES.unpack_from(data, self.values_at)
         self._compare(self.rig.sample(), recorded, sim_time_s)
         self.result.samples += 1

@@ -16,6 +16,13 @@ from .stability import SteadyState, steady_state
 
 RPM = 2.0 * math.pi / 60.0   # rad/s per rpm
 
+# The bit's regime in the last step, as the kernel decides it (MODEL.md section 2.2); published
+# by the node and recorded, so every consumer uses the kernel's own decision.
+REGIME_ROTATING, REGIME_STUCK, REGIME_OFF_BOTTOM = (kn.REGIME_ROTATING, kn.REGIME_STUCK,
+                                                   kn.REGIME_OFF_BOTTOM)
+REGIME_NAMES = {REGIME_ROTATING: "rotating", REGIME_STUCK: "stuck",
+                REGIME_OFF_BOTTOM: "off_bottom"}
+
 
 class RigSample(NamedTuple):
     """What a rig shows at one instant, SI. Axial quantities are positive downhole.
@@ -39,6 +46,7 @@ class RigSample(NamedTuple):
     stuck: bool
     off_bottom: bool
     stick_slip: bool               # a stick phase within the stick-slip window
+    regime: int                    # the kernel's regime of the last step: REGIME_* below
 
 
 class Rig:
@@ -166,11 +174,29 @@ class Rig:
         return self.advance_to(self.time_s + check_number("duration_s", duration_s,
                                                           low_inclusive=True))
 
+    @property
+    def steps(self) -> int:
+        """Steps taken since the start (time_s = steps * dt_s)."""
+        return self.sim.steps
+
+    def advance_steps(self, n_steps: int) -> None:
+        """Advance exactly ``n_steps`` steps (>= 0) with the commands held."""
+        if n_steps > 0:
+            self.sim.advance(int(n_steps))
+
+    def warm_up(self) -> None:
+        """Load the compiled kernel now (a zero-step advance), so the first real step is fast."""
+        self.sim.advance(0)
+
+    def reset_metrics_window(self) -> None:
+        """Start a new metrics window now (see ``metrics``)."""
+        self.sim.reset_window()
+
     # ---- observation --------------------------------------------------------------------
     def sample(self) -> RigSample:
         """The rig's outputs now, in SI. Read straight from the state arrays: the node calls
         this every tick."""
-        x, regime = self.sim._x, self.sim._k[kn.K_REGIME]
+        x, regime = self.sim.live_state, self.sim.regime
         sc = self.scales
         c = sc.stiffness_nm_per_rad
         return RigSample(
@@ -190,6 +216,7 @@ class Rig:
             stuck=bool(regime == kn.REGIME_STUCK),
             off_bottom=bool(regime == kn.REGIME_OFF_BOTTOM),
             stick_slip=self.sim.stick_slip,
+            regime=regime,
         )
 
     def metrics(self) -> dict[str, float]:

@@ -243,6 +243,17 @@ class Simulator:
     def steps(self) -> int:
         return int(self._k[kn.K_STEPS])
 
+    @property
+    def regime(self) -> int:
+        """kernel.REGIME_* of the last step."""
+        return int(self._k[kn.K_REGIME])
+
+    @property
+    def live_state(self) -> np.ndarray:
+        """The kernel's state vector itself (indexed by kernel.X_*), not a copy: the cheapest
+        read for a caller sampling every tick. Read it; never write it."""
+        return self._x
+
     def state(self) -> StateView:
         x, k = self._x, self._k
         return StateView(tau=x[kn.X_TAU], u=x[kn.X_U], v=x[kn.X_V], phi=x[kn.X_PHI],

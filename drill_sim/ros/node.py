@@ -322,7 +322,7 @@ class RigNode(Node):
         rate = self._tick_count - self._diag_ticks
         rtf = (self.rig.time_s - self._diag_sim) / wall
         metrics = self.rig.metrics()
-        self.rig.sim.reset_window()
+        self.rig.reset_metrics_window()
         self._diag_ticks, self._diag_wall, self._diag_sim = self._tick_count, now, self.rig.time_s
         s = self.rig.sample()
         age = now - self._cmd_wall
@@ -377,7 +377,7 @@ def main(args: list[str] | None = None) -> int:
         node = RigNode()
         executor = EventsExecutor()
         executor.add_node(node)
-        node.rig.sim.advance(0)   # load the compiled kernel before the first tick is due
+        node.rig.warm_up()   # load the compiled kernel before the first tick is due
         # EventsExecutor.spin() does not dispatch timers in this rclpy; spin_once() does, at
         # 1 kHz with p99 period ~1.08 ms and a fifth of the CPU of SingleThreadedExecutor.
         if node.max_speed:
