@@ -14,9 +14,9 @@ from ..bag import reader
 from ..bag.resim import resimulate
 from ..bag.series import rig_series
 from ..bag.writer import BagError
+from ..terminal import Progress
 from .errors import UsageError
 from .plot import plot_rig_series
-from .progress import Progress
 
 
 def add_arguments(sub) -> None:

@@ -31,10 +31,10 @@ from ..core import (
     steady_state,
 )
 from ..core.simulator import DEFAULT_DT, Trajectory
+from ..terminal import Progress
 from . import bag as bag_cli
 from .errors import UsageError
 from .plot import plot_time_series
-from .progress import Progress
 from .run import add_arguments, run_session
 
 SI_COLUMNS = ("time_s", "bit_speed_rad_s", "rop_m_s", "wob_n", "tob_nm", "surface_torque_nm",

@@ -25,7 +25,7 @@ from rclpy.utilities import remove_ros_args
 
 from .. import __version__
 from ..bag.writer import BagError, BagWriter
-from ..cli.progress import StatusLine
+from ..terminal import StatusLine
 from .stopping import init_stoppable
 from .topics import UnknownType, message_class, profile_dict, subscription_qos
 

@@ -27,7 +27,7 @@ from ..bag import cdr
 from ..bag.mcap_scan import McapScan
 from ..bag.reader import info, mcap_files
 from ..bag.writer import BagError
-from ..cli.progress import StatusLine
+from ..terminal import StatusLine
 from .stopping import init_stoppable
 from .topics import UnknownType, message_class, profile_from_dicts
 

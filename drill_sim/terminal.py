@@ -1,4 +1,7 @@
-"""Lines rewritten in place on stderr (status, progress bar), shown only on a terminal."""
+"""Lines rewritten in place on stderr (status, progress bar), shown only on a terminal.
+
+Top level, with nothing but the standard library, so that the ROS programs and the command
+line both draw their status lines without importing each other."""
 
 from __future__ import annotations
 
