@@ -7,12 +7,13 @@ from .metrics import Metrics
 from .parameters import Groups, ParameterError, RigParameters, Scales, StringGeometry
 from .presets import Preset, load_preset, preset_names
 from .rig import RPM, Rig, RigSample
+from .si_trajectory import SITrajectory
 from .simulator import DEFAULT_DT, Simulator, StateView, Trajectory
 from .stability import NoSteadyDrilling, StabilityResult, SteadyState, stability, steady_state
 
 __all__ = [
     "DEFAULT_DT", "RPM", "Groups", "Metrics", "NoSteadyDrilling", "ParameterError", "Preset", "Rig",
-    "RigParameters", "RigSample", "Scales", "Simulator", "StabilityResult", "StateView",
-    "SteadyState", "StringGeometry", "Trajectory", "load_preset", "preset_names", "stability",
-    "steady_state",
+    "RigParameters", "RigSample", "SITrajectory", "Scales", "Simulator", "StabilityResult",
+    "StateView", "SteadyState", "StringGeometry", "Trajectory", "load_preset", "preset_names",
+    "stability", "steady_state",
 ]

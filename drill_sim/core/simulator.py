@@ -15,7 +15,8 @@ import numpy as np
 
 from . import kernel as kn
 from .metrics import Metrics
-from .parameters import Groups, ParameterError, check_number
+from .parameters import Groups, ParameterError, Scales, check_number
+from .si_trajectory import SITrajectory
 from .stability import steady_state
 
 DEFAULT_DT = 5e-4            # [t*]; chosen from the convergence study (tests/test_convergence.py)
@@ -88,6 +89,10 @@ class Trajectory:
                    off_bottom=rows[:, kn.O_REGIME] == kn.REGIME_OFF_BOTTOM,
                    w0=rows[:, kn.O_W0].copy(), omega0=rows[:, kn.O_OMEGA0].copy(),
                    metrics=metrics)
+
+    def to_si(self, scales: Scales, blade_count: int) -> SITrajectory:
+        """The same samples in SI, units in the field names (depth of cut per revolution)."""
+        return SITrajectory.of(self, scales, blade_count)
 
 
 class Simulator:
