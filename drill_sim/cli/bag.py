@@ -19,10 +19,8 @@ from .errors import UsageError
 from .plot import plot_rig_series
 
 
-def add_arguments(sub) -> None:
-    bag = sub.add_parser("bag", help="tools on rosbag2 MCAP bags: info, repair, metrics, "
-                                     "export, plot, resim")
-    tools = bag.add_subparsers(dest="bag_command", required=True, parser_class=type(bag))
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    tools = parser.add_subparsers(dest="bag_command", required=True, parser_class=type(parser))
     info = tools.add_parser("info", help="topics, types, counts, duration, metadata")
     info.add_argument("bag", type=Path, help="bag directory or .mcap file")
     repair = tools.add_parser("repair", help="rewrite a bag cut short by a crash: summary, "

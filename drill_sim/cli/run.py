@@ -28,22 +28,22 @@ def executable(name: str) -> str:
     return found
 
 
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--scenario", default="tag_bottom", help="shipped scenario or YAML file")
-    p.add_argument("--preset", default="base", help="rig preset or preset YAML file")
-    p.add_argument("--duration", type=float, default=None,
-                   help="wall seconds to run; default: the scenario's duration")
-    p.add_argument("--plot", type=Path, default=Path("drill_sim.png"),
-                   help="PNG written at the end")
-    p.add_argument("--record", type=Path, default=None, metavar="BAG",
-                   help="bag directory to record the session into (default: "
-                        "drill_sim_session_<date>-<time> here)")
-    p.add_argument("--no-record", action="store_true", help="do not record the session")
-    p.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, default=[],
-                   help="passed on to drill_sim_node (e.g. -p rate_hz:=500.0)")
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--scenario", default="tag_bottom", help="shipped scenario or YAML file")
+    parser.add_argument("--preset", default="base", help="rig preset or preset YAML file")
+    parser.add_argument("--duration", type=float, default=None,
+                        help="wall seconds to run; default: the scenario's duration")
+    parser.add_argument("--plot", type=Path, default=Path("drill_sim.png"),
+                        help="PNG written at the end")
+    parser.add_argument("--record", type=Path, default=None, metavar="BAG",
+                        help="bag directory to record the session into (default: "
+                             "drill_sim_session_<date>-<time> here)")
+    parser.add_argument("--no-record", action="store_true", help="do not record the session")
+    parser.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, default=[],
+                        help="passed on to drill_sim_node (e.g. -p rate_hz:=500.0)")
 
 
-def run_session(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
 
