@@ -43,8 +43,8 @@ setup(
             "drill_sim = drill_sim.cli.main:main",
             "drill_sim_node = drill_sim.ros.node:main",
             "drill_sim_drive = drill_sim.ros.driver:main",
-            "drill_sim_record = drill_sim.ros.record:main",
-            "drill_sim_replay = drill_sim.ros.replay:main",
+            "drill_sim_record = drill_sim.cli.record:main",
+            "drill_sim_replay = drill_sim.cli.replay:main",
         ],
     },
 )

@@ -1,32 +1,24 @@
-"""``drill_sim_record``: records topics of the ROS graph into a rosbag2 MCAP bag.
+"""The recorder behind ``drill_sim_record`` (its command line: ``drill_sim.cli.record``).
 
 Like ``ros2 bag record``: the listed topics, a regular expression, or all; topics that appear
 later are picked up as they are discovered. Subscriptions are raw (the CDR bytes go to the bag
 untouched) and adapt their QoS to the publishers, whose offered profiles are written beside the
-topic. Ctrl-C or SIGTERM closes the bag properly; a killed recorder loses at most the last
+topic. A stop request closes the bag properly; a killed recorder loses at most the last
 second, and ``drill_sim bag repair`` restores the rest.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import re
-import sys
 import time
-from datetime import datetime
-from pathlib import Path
 
 import rclpy
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.task import Future
-from rclpy.utilities import remove_ros_args
 
-from .. import __version__
 from ..bag.writer import BagError, BagWriter
 from ..terminal import StatusLine
-from .stopping import init_stoppable
 from .topics import UnknownType, message_class, profile_dict, subscription_qos
 
 
@@ -95,62 +87,18 @@ class TopicRecorder(Node):
         return on_message
 
 
-def _arguments(argv: list[str]) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
-        prog="drill_sim_record",
-        description="Record topics into a rosbag2 MCAP bag (what `ros2 bag record` does).")
-    parser.add_argument("topics", nargs="*", help="topic names to record")
-    parser.add_argument("-a", "--all", action="store_true", help="record every topic")
-    parser.add_argument("-e", "--regex", help="record topics matching this regular expression")
-    parser.add_argument("-x", "--exclude", help="skip topics matching this regular expression")
-    parser.add_argument("-o", "--output", help="bag directory to create "
-                        "(default: drill_sim_record_<date>-<time>)")
-    parser.add_argument("-d", "--max-bag-duration", type=float, default=0.0, metavar="S",
-                        help="start a new file every S seconds (0 = never)")
-    parser.add_argument("-b", "--max-bag-size", type=int, default=0, metavar="BYTES",
-                        help="start a new file past this size (0 = never)")
-    parser.add_argument("--duration", type=float, default=0.0, metavar="S",
-                        help="stop after S seconds of wall time (0 = until Ctrl-C)")
-    parser.add_argument("--queue-depth", type=int, default=1000,
-                        help="subscription history depth per topic [messages] (default 1000)")
-    parser.add_argument("--discovery-period", type=float, default=0.1, metavar="S",
-                        help="how often to look for new topics [s] (default 0.1)")
-    args = parser.parse_args(argv)
-    if not (args.topics or args.all or args.regex):
-        parser.error("name topics, or give --regex or --all")
-    for name, value in (("--max-bag-duration", args.max_bag_duration),
-                        ("--max-bag-size", args.max_bag_size), ("--duration", args.duration)):
-        if not value >= 0:
-            parser.error(f"{name} = {value}: expected a number >= 0")
-    if not (args.queue_depth >= 1 and args.discovery_period > 0):
-        parser.error("--queue-depth must be >= 1 and --discovery-period > 0")
-    if args.regex or args.exclude:
-        try:
-            re.compile(args.regex or ""), re.compile(args.exclude or "")
-        except re.error as exc:
-            parser.error(f"bad regular expression: {exc}")
-    return args
-
-
-def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv if argv is None else argv
-    args = _arguments(remove_ros_args(argv)[1:])
-    output = Path(args.output or datetime.now().strftime("drill_sim_record_%Y_%m_%d-%H_%M_%S"))
-    session = {"package": "drill_sim", "version": __version__,
-               "start_time_ns": str(time.time_ns()), "command_line": json.dumps(argv)}
-    try:
-        writer = BagWriter(output, split_duration_s=args.max_bag_duration,
-                           split_size_bytes=args.max_bag_size, metadata={"session": session})
-    except BagError as exc:
-        print(f"drill_sim_record: {exc}", file=sys.stderr)
-        return 2
-    stop = init_stoppable(argv)
-    node = TopicRecorder(writer, TopicSelection(args.topics, args.regex, args.all, args.exclude),
-                         args.queue_depth)
+def record(writer: BagWriter, select: TopicSelection, stop: list[int], *,
+           queue_depth: int = 1000, duration_s: float = 0.0,
+           discovery_period_s: float = 0.1) -> str | None:
+    """Record into ``writer`` until ``stop`` fills (see ``stopping.init_stoppable``, which must
+    have started rclpy), ``duration_s`` of wall time passes (0: no limit) or writing fails;
+    then shut rclpy down and close the bag. Returns what stopped the recording early, or None.
+    """
+    node = TopicRecorder(writer, select, queue_depth)
     executor = EventsExecutor()
     executor.add_node(node)
     status = _Status(writer)
-    end = time.monotonic() + args.duration if args.duration else float("inf")
+    end = time.monotonic() + duration_s if duration_s else float("inf")
     next_discovery = 0.0
     never = Future()
     try:
@@ -159,9 +107,9 @@ def main(argv: list[str] | None = None) -> int:
             if now >= next_discovery:
                 node.discover()
                 status.show(now)
-                next_discovery = now + args.discovery_period
+                next_discovery = now + discovery_period_s
             # many messages per call, dispatched in C++ (spin_once returns after each one)
-            executor.spin_until_future_complete(never, timeout_sec=args.discovery_period)
+            executor.spin_until_future_complete(never, timeout_sec=discovery_period_s)
         _drain(executor, writer)
     finally:
         status.close()
@@ -172,13 +120,7 @@ def main(argv: list[str] | None = None) -> int:
             writer.close()
         except (OSError, BagError) as exc:
             node.error = node.error or f"closing the bag failed: {exc}"
-    counts = ", ".join(f"{t.name} {t.count}" for t in writer.topics.values()) or "no topics"
-    print(f"drill_sim_record: {sum(t.count for t in writer.topics.values())} messages in "
-          f"{output} ({counts})", file=sys.stderr)
-    if node.error is not None:
-        print(f"drill_sim_record: {node.error}", file=sys.stderr)
-        return 1
-    return 0
+    return node.error
 
 
 def _drain(executor: EventsExecutor, writer: BagWriter, quiet_s: float = 0.05,
@@ -211,7 +153,3 @@ class _Status:
 
     def close(self) -> None:
         self.line.close()
-
-
-if __name__ == "__main__":
-    sys.exit(main())
