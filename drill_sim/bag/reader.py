@@ -15,9 +15,10 @@ from pathlib import Path
 import yaml
 from mcap.reader import SeekingReader
 
+from .errors import BagError
 from .mcap_file import McapFileWriter
 from .mcap_scan import McapScan
-from .writer import BagError, bag_information, file_entry
+from .metadata import bag_information, file_entry
 
 
 @dataclass(frozen=True)

@@ -21,9 +21,9 @@ from pathlib import Path
 
 from ..core import NoSteadyDrilling, ParameterError, session
 from ..core.rig import Rig, RigSample
+from .errors import BagError
 from .reader import info, read_messages
 from .series import JOINT_ARRAY_START, JOINT_FIELDS, JOINT_VALUES_F64, joint_state_layout
-from .writer import BagError
 
 _STAMP = struct.Struct("<iI")
 _JOINT_VALUES = struct.Struct(f"<{JOINT_VALUES_F64}d")

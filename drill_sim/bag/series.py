@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import BagError
 from .mcap_scan import McapScan
 from .reader import mcap_files, topic_types
 from .rig_messages import JOINT_NAMES
-from .writer import BagError
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 # where each quantity sits in the node's joint_states (msg_docs/node.md): (array, joint index)
