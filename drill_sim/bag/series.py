@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import BagError
+from .mcap_index import fixed_size_channel
 from .mcap_scan import McapScan
 from .reader import mcap_files, topic_types
 from .rig_messages import JOINT_NAMES
@@ -134,7 +135,7 @@ def rig_series(bag: str | Path, topic: str | None = None) -> RigSeries:
     parts = []
     for file in mcap_files(bag):
         with McapScan(file, []) as scan:
-            values = scan.fixed_size_channel(name, _decode)
+            values = fixed_size_channel(scan, name, _decode)
             if values is None:                  # no index or sizes differ: message by message
                 names = scan.channels.topics
                 datas = [bytes(d) for cid, _, _, d in scan.messages() if names.get(cid) == name]
