@@ -24,9 +24,8 @@ from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock
 
 from ..bag import cdr
-from ..bag.mcap_scan import McapScan
-from ..bag.reader import info, mcap_files
-from ..bag.writer import BagError
+from ..bag.bag import Bag
+from ..bag.errors import BagError
 from ..cli.progress import StatusLine
 from .stopping import init_stoppable
 from .topics import UnknownType, message_class, profile_from_dicts
@@ -35,7 +34,7 @@ from .topics import UnknownType, message_class, profile_from_dicts
 class Player(Node):
     """Publishers for the bag's topics and the timed loop that feeds them."""
 
-    def __init__(self, bag: Path, topics: dict[str, tuple[str, str]], start_ns: int,
+    def __init__(self, bag: Bag, topics: dict[str, tuple[str, str]], start_ns: int,
                  args: argparse.Namespace) -> None:
         super().__init__("drill_sim_replay")
         self.bag, self.bag_start_ns, self.args = bag, start_ns, args
@@ -90,32 +89,31 @@ class Player(Node):
         wall0 = next_clock = 0.0
         publishers = self.publishers_by_topic
         problems: list[str] = []
-        for file in mcap_files(self.bag):
-            with McapScan(file, problems) as scan:
-                topics = scan.channels.topics
-                for cid, log, _, data in scan.messages():
-                    pub = publishers.get(topics.get(cid))
-                    if pub is None:
-                        continue
-                    if first is None:
-                        first = self.bag_start_ns + offset_ns
-                        wall0 = next_clock = time.monotonic()
-                    if log < first:
-                        continue                        # before the start offset
-                    due = wall0 + (log - first) * 1e-9 / rate
-                    while True:                         # wait, keeping /clock going
-                        now = time.monotonic()
-                        if now >= next_clock:
-                            self._publish_clock(first + (now - wall0) * rate * 1e9)
-                            next_clock = now + clock_period
-                        if now >= due or stop:
-                            break
-                        time.sleep(min(due, next_clock) - now)
-                    if stop:
-                        return
-                    pub.publish(bytes(data))
-                    self.sent += 1
-                    progress(log)
+        for scan in self.bag.scans(problems):
+            topics = scan.channels.topics
+            for cid, log, _, data in scan.messages():
+                pub = publishers.get(topics.get(cid))
+                if pub is None:
+                    continue
+                if first is None:
+                    first = self.bag_start_ns + offset_ns
+                    wall0 = next_clock = time.monotonic()
+                if log < first:
+                    continue                        # before the start offset
+                due = wall0 + (log - first) * 1e-9 / rate
+                while True:                         # wait, keeping /clock going
+                    now = time.monotonic()
+                    if now >= next_clock:
+                        self._publish_clock(first + (now - wall0) * rate * 1e9)
+                        next_clock = now + clock_period
+                    if now >= due or stop:
+                        break
+                    time.sleep(min(due, next_clock) - now)
+                if stop:
+                    return
+                pub.publish(bytes(data))
+                self.sent += 1
+                progress(log)
         for problem in problems:
             self.get_logger().warning(problem)
 
@@ -171,7 +169,8 @@ def main(argv: list[str] | None = None) -> int:
     args = _arguments(remove_ros_args(argv)[1:])
     bag = Path(args.bag)
     try:
-        found = info(bag)
+        source = Bag.open(bag)                  # opened once: info, then every pass
+        found = source.info()
     except BagError as exc:
         print(f"drill_sim_replay: {exc}", file=sys.stderr)
         return 2
@@ -192,7 +191,7 @@ def main(argv: list[str] | None = None) -> int:
               f"end ({found.duration_s:.3f} s)", file=sys.stderr)
         return 2
     stop = init_stoppable(argv)
-    player = Player(bag, topics, found.start_ns, args)
+    player = Player(source, topics, found.start_ns, args)
     try:
         if not player.publishers_by_topic:
             print("drill_sim_replay: none of the bag's message types is installed here",
@@ -217,6 +216,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         player.destroy_node()
         rclpy.try_shutdown()
+        source.close()
     return 0
 
 
