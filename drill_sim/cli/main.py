@@ -107,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
                                      "summary and plot")
     add_arguments(run)
 
-    bag_cli.add_arguments(sub)
+    bag_cli.add_arguments(sub.add_parser("bag", help=bag_cli.HELP))
 
     stab = sub.add_parser("stability", help="steady drilling and the rightmost roots of Delta(s)")
     model_args(stab)
