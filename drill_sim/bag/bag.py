@@ -123,7 +123,8 @@ class Bag:
         return self._mapped[file]
 
     def scans(self, problems: list[str]) -> Iterator[McapScan]:
-        """A fresh walk over each file in order, damage reported into ``problems``."""
+        """A fresh walk over each file in order, damage reported into ``problems`` (OSError
+        for a file that cannot be opened)."""
         for file in self.files:
             yield McapScan(self.mapped(file), problems)
 
