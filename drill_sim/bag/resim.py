@@ -21,9 +21,9 @@ from pathlib import Path
 
 from ..core import NoSteadyDrilling, ParameterError, session
 from ..core.rig import Rig, RigSample
-from .reader import info, read_messages
+from .bag import Bag, opened
+from .errors import BagError
 from .series import JOINT_ARRAY_START, JOINT_FIELDS, JOINT_VALUES_F64, joint_state_layout
-from .writer import BagError
 
 _STAMP = struct.Struct("<iI")
 _JOINT_VALUES = struct.Struct(f"<{JOINT_VALUES_F64}d")
@@ -69,14 +69,18 @@ class ResimResult:
         return "differs from the recording; likely causes: " + "; ".join(why)
 
 
-def resimulate(bag: str | Path, progress: Callable[[float], None] | None = None
+def resimulate(bag: str | Path | Bag, progress: Callable[[float], None] | None = None
                ) -> ResimResult:
     """Re-run the session recorded in ``bag`` and compare it sample by sample."""
-    bag = Path(bag)
-    found = info(bag)
+    with opened(bag) as b:
+        return _resimulate(b, progress)
+
+
+def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResult:
+    found = bag.info()
     meta = found.metadata
     if "parameters" not in meta or "node" not in meta.get("session", {}):
-        raise BagError(f"bag {bag}: no drill_sim session metadata (parameters, session); "
+        raise BagError(f"bag {bag.path}: no drill_sim session metadata (parameters, session); "
                        "resim re-runs sessions the rig node recorded itself")
     p = {k: session.parse_value(v) for k, v in meta["parameters"].items()}
     node = meta["session"]["node"]
@@ -85,19 +89,20 @@ def resimulate(bag: str | Path, progress: Callable[[float], None] | None = None
               "hook": f"{node}/cmd/hook_load",
               "events": meta["session"].get("events_topic", f"{node}/events")}
     if topics["joints"] not in found.topics:
-        raise BagError(f"bag {bag}: no {topics['joints']} to compare with")
-    result = ResimResult(bag, "sim-time" if p.get("publish_clock") else "real-time",
+        raise BagError(f"bag {bag.path}: no {topics['joints']} to compare with")
+    result = ResimResult(bag.path, "sim-time" if p.get("publish_clock") else "real-time",
                          meta["session"].get("preset", "?"), problems=list(found.problems))
     try:
         rig = session.make_rig(p)
         session.start(rig, p)
     except (ParameterError, NoSteadyDrilling, KeyError) as exc:
-        raise BagError(f"bag {bag}: the recorded parameters do not make a rig: {exc}") from None
+        raise BagError(f"bag {bag.path}: the recorded parameters do not make a rig: {exc}") \
+            from None
     run = _Rerun(rig, p, epoch_ns, result)
     total = max(found.topics[topics["joints"]].count, 1)
     handlers = {topics["joints"]: run.sample, topics["speed"]: run.speed,
                 topics["hook"]: run.hook, topics["events"]: run.event}
-    for m in read_messages(bag, set(handlers), result.problems):
+    for m in bag.messages(set(handlers), result.problems):
         handlers[m.topic](m.data)
         if progress is not None and m.topic == topics["joints"]:
             progress(result.samples / total)

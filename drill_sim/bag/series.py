@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .mcap_scan import McapScan
-from .reader import mcap_files, topic_types
+from .bag import Bag, opened
+from .errors import BagError
+from .mcap_index import fixed_size_channel
 from .rig_messages import JOINT_NAMES
-from .writer import BagError
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 # where each quantity sits in the node's joint_states (msg_docs/node.md): (array, joint index)
@@ -120,21 +120,21 @@ def joint_state_layout(data: bytes) -> tuple[list[str], int]:
     return names, align(pos + 4, 8)
 
 
-def rig_series(bag: str | Path, topic: str | None = None) -> RigSeries:
+def rig_series(bag: str | Path | Bag, topic: str | None = None) -> RigSeries:
     """The rig series of ``topic`` (default: the one topic ending in ``joint_states``)."""
-    joint_topics = sorted(t for t, kind in topic_types(bag).items()
-                          if kind == JOINT_STATE and (topic is None or t == topic))
-    if not joint_topics:
-        raise BagError(f"bag {bag}: no {JOINT_STATE} topic{'' if topic is None else ' ' + topic}"
-                       " to read the rig from")
-    if len(joint_topics) > 1:
-        raise BagError(f"bag {bag}: several joint_states topics ({', '.join(joint_topics)}); "
-                       "choose one with --topic")
-    name = joint_topics[0]
-    parts = []
-    for file in mcap_files(bag):
-        with McapScan(file, []) as scan:
-            values = scan.fixed_size_channel(name, _decode)
+    with opened(bag) as b:
+        joint_topics = sorted(t for t, kind in b.topic_types().items()
+                              if kind == JOINT_STATE and (topic is None or t == topic))
+        if not joint_topics:
+            raise BagError(f"bag {b.path}: no {JOINT_STATE} topic"
+                           f"{'' if topic is None else ' ' + topic} to read the rig from")
+        if len(joint_topics) > 1:
+            raise BagError(f"bag {b.path}: several joint_states topics "
+                           f"({', '.join(joint_topics)}); choose one with --topic")
+        name = joint_topics[0]
+        parts = []
+        for scan in b.scans([]):
+            values = fixed_size_channel(scan, name, _decode)
             if values is None:                  # no index or sizes differ: message by message
                 names = scan.channels.topics
                 datas = [bytes(d) for cid, _, _, d in scan.messages() if names.get(cid) == name]

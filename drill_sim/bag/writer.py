@@ -15,7 +15,9 @@ from pathlib import Path
 
 import yaml
 
+from .errors import BagError
 from .mcap_file import McapFileWriter
+from .metadata import bag_information, file_entry, write_metadata_yaml
 from .schema import message_definition, type_hash
 
 _NS_LIMIT = 1 << 64
@@ -33,10 +35,6 @@ def qos_profile(reliability: str = "reliable", depth: int = 10,
 
 def qos_yaml(profiles: list[dict]) -> str:
     return yaml.safe_dump(profiles, sort_keys=False, default_flow_style=False)
-
-
-class BagError(OSError):
-    """A bag cannot be written or read: the message names the file and what went wrong."""
 
 
 @dataclass
@@ -135,7 +133,7 @@ class BagWriter:
         if self.closed:
             return
         self._finish_file()
-        self._write_metadata_yaml()
+        write_metadata_yaml(self.path, self._information())
         self.closed = True
 
     def __enter__(self) -> BagWriter:
@@ -200,44 +198,3 @@ class BagWriter:
         w = f.writer
         return file_entry(f.path.name, w.start_time, w.end_time or 0, w.message_count)
 
-    def _write_metadata_yaml(self) -> None:
-        text = yaml.safe_dump(self._information(), sort_keys=False)
-        tmp = self.path / "metadata.yaml.tmp"
-        tmp.write_text(text, encoding="utf-8")
-        tmp.replace(self.path / "metadata.yaml")
-
-
-def file_entry(name: str, start_ns: int | None, end_ns: int, count: int) -> dict:
-    """One file's entry in metadata.yaml."""
-    start = start_ns or 0
-    return {"path": name, "starting_time": {"nanoseconds_since_epoch": start},
-            "duration": {"nanoseconds": max(0, end_ns - start)}, "message_count": count}
-
-
-def bag_information(topics: list[dict], files: list[dict], custom_data: dict | None = None,
-                    ros_distro: str = "jazzy") -> dict:
-    """metadata.yaml (version 9) from topics {name, type, qos (list), hash, count} and file
-    entries."""
-    live = [e for e in files if e["message_count"]]
-    start = min((e["starting_time"]["nanoseconds_since_epoch"] for e in live), default=0)
-    end = max((e["starting_time"]["nanoseconds_since_epoch"] + e["duration"]["nanoseconds"]
-               for e in live), default=start)
-    return {"rosbag2_bagfile_information": {
-        "version": 9,
-        "storage_identifier": "mcap",
-        "duration": {"nanoseconds": end - start},
-        "starting_time": {"nanoseconds_since_epoch": start},
-        "message_count": sum(e["message_count"] for e in files),
-        "topics_with_message_count": [
-            {"topic_metadata": {"name": t["name"], "type": t["type"],
-                                "serialization_format": "cdr",
-                                "offered_qos_profiles": t["qos"],
-                                "type_description_hash": t["hash"]},
-             "message_count": t["count"]} for t in topics],
-        "compression_format": "",
-        "compression_mode": "",
-        "relative_file_paths": [e["path"] for e in files],
-        "files": files,
-        "custom_data": dict(custom_data or {}),
-        "ros_distro": ros_distro,
-    }}

@@ -17,8 +17,8 @@ from pathlib import Path
 import rclpy
 from rclpy.utilities import remove_ros_args
 
-from ..bag.reader import info
-from ..bag.writer import BagError
+from ..bag.bag import Bag, BagInfo
+from ..bag.errors import BagError
 from ..ros.replay import Player, PlayOptions
 from ..ros.stopping import init_stoppable
 from ..terminal import StatusLine
@@ -68,7 +68,8 @@ def run(args: argparse.Namespace) -> int:
     argv = getattr(args, "argv", None) or sys.argv
     bag = Path(args.bag)
     try:
-        found = info(bag)
+        source = Bag.open(bag)                  # opened once: info, then every pass
+        found = source.info()
     except BagError as exc:
         print(f"drill_sim_replay: {exc}", file=sys.stderr)
         return 2
@@ -88,8 +89,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"drill_sim_replay: --start-offset = {args.start_offset:g} s is past the bag's "
               f"end ({found.duration_s:.3f} s)", file=sys.stderr)
         return 2
+    try:
+        return _play(args, argv, bag, source, found, topics)
+    finally:
+        source.close()
+
+
+def _play(args: argparse.Namespace, argv: list[str], bag: Path, source: Bag, found: BagInfo,
+          topics: dict[str, tuple[str, str]]) -> int:
     stop = init_stoppable(argv)
-    player = Player(bag, topics, found.start_ns, PlayOptions(
+    player = Player(source, topics, found.start_ns, PlayOptions(
         rate=args.rate, start_offset_s=args.start_offset, clock_hz=args.clock,
         queue_depth=args.queue_depth, wait_for=args.wait_for, wait_timeout_s=args.wait_timeout))
     try:

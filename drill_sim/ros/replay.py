@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import yaml
 from rclpy.duration import Duration
@@ -21,8 +20,7 @@ from rclpy.qos import QoSProfile
 from rosgraph_msgs.msg import Clock
 
 from ..bag import cdr
-from ..bag.mcap_scan import McapScan
-from ..bag.reader import mcap_files
+from ..bag.bag import Bag
 from .topics import UnknownType, message_class, profile_from_dicts
 
 
@@ -41,7 +39,7 @@ class PlayOptions:
 class Player(Node):
     """Publishers for the bag's topics and the timed loop that feeds them."""
 
-    def __init__(self, bag: Path, topics: dict[str, tuple[str, str]], start_ns: int,
+    def __init__(self, bag: Bag, topics: dict[str, tuple[str, str]], start_ns: int,
                  options: PlayOptions) -> None:
         super().__init__("drill_sim_replay")
         self.bag, self.bag_start_ns, self.options = bag, start_ns, options
@@ -97,32 +95,31 @@ class Player(Node):
         wall0 = next_clock = 0.0
         publishers = self.publishers_by_topic
         problems: list[str] = []
-        for file in mcap_files(self.bag):
-            with McapScan(file, problems) as scan:
-                topics = scan.channels.topics
-                for cid, log, _, data in scan.messages():
-                    pub = publishers.get(topics.get(cid))
-                    if pub is None:
-                        continue
-                    if first is None:
-                        first = self.bag_start_ns + offset_ns
-                        wall0 = next_clock = time.monotonic()
-                    if log < first:
-                        continue                        # before the start offset
-                    due = wall0 + (log - first) * 1e-9 / rate
-                    while True:                         # wait, keeping /clock going
-                        now = time.monotonic()
-                        if now >= next_clock:
-                            self._publish_clock(first + (now - wall0) * rate * 1e9)
-                            next_clock = now + clock_period
-                        if now >= due or stop:
-                            break
-                        time.sleep(min(due, next_clock) - now)
-                    if stop:
-                        return
-                    pub.publish(bytes(data))
-                    self.sent += 1
-                    progress(log)
+        for scan in self.bag.scans(problems):
+            topics = scan.channels.topics
+            for cid, log, _, data in scan.messages():
+                pub = publishers.get(topics.get(cid))
+                if pub is None:
+                    continue
+                if first is None:
+                    first = self.bag_start_ns + offset_ns
+                    wall0 = next_clock = time.monotonic()
+                if log < first:
+                    continue                        # before the start offset
+                due = wall0 + (log - first) * 1e-9 / rate
+                while True:                         # wait, keeping /clock going
+                    now = time.monotonic()
+                    if now >= next_clock:
+                        self._publish_clock(first + (now - wall0) * rate * 1e9)
+                        next_clock = now + clock_period
+                    if now >= due or stop:
+                        break
+                    time.sleep(min(due, next_clock) - now)
+                if stop:
+                    return
+                pub.publish(bytes(data))
+                self.sent += 1
+                progress(log)
         for problem in problems:
             self.get_logger().warning(problem)
 
