@@ -10,7 +10,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64, String
 
-from drill_sim.bag import cdr
+from drill_sim.wire import cdr
 
 VALUES = [(0.0, -0.0, 1.5, -3.25e7, 1e-300, 123.456), (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)]
 

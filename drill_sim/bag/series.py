@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..wire.rig_topics import JOINT_NAMES, JOINT_STATES
 from .mcap_scan import McapScan
 from .reader import mcap_files, topic_types
-from .rig_messages import JOINT_NAMES
 from .writer import BagError
 
-JOINT_STATE = "sensor_msgs/msg/JointState"
+JOINT_STATE = JOINT_STATES.type_name
 # where each quantity sits in the node's joint_states (msg_docs/node.md): (array, joint index)
 JOINT_FIELDS = {
     "top_drive_speed_rad_s": ("velocity", 0), "surface_torque_nm": ("effort", 0),

@@ -14,6 +14,7 @@ from ..bag import reader
 from ..bag.resim import resimulate
 from ..bag.series import rig_series
 from ..bag.writer import BagError
+from ..wire import WireError
 from .errors import UsageError
 from .plot import plot_rig_series
 from .progress import Progress
@@ -59,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
             result = reader.repair(args.bag)
             print(f"repaired {args.bag}: {result.message_count} messages over "
                   f"{result.duration_s:.3f} s kept; damaged originals left as *.mcap.damaged")
-    except BagError as exc:
+    except (BagError, WireError) as exc:
         raise UsageError(str(exc)) from None
     return 0
 

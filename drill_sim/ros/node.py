@@ -11,27 +11,28 @@ import json
 import math
 import sys
 import time
+from functools import partial
+from operator import attrgetter
 
 import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
-from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState
-from std_msgs.msg import Bool, Float64
 from std_srvs.srv import SetBool, Trigger
 
-from ..bag import rig_messages
 from ..bag.writer import BagError
 from ..core import NoSteadyDrilling, ParameterError, load_preset, session
 from ..core.rig import RigSample
-from . import interface as itf
+from ..wire import rig_topics
+from ..wire.cdr import VECTOR_FIELDS
+from ..wire.rig_messages import RigEncoders
+from ..wire.rig_topics import RigTopic
 from .parameters import specs
 from .recorder import SessionRecorder
 from .stopping import init_stoppable
+from .topics import message_class, rclpy_qos, service_class
 
 REGIME_NAMES = {True: "stick-slip", False: "drilling"}
 
@@ -40,7 +41,7 @@ class RigNode(Node):
     """The drilling rig node. Parameters, topics and services: msg_docs/node.md."""
 
     def __init__(self, **kwargs) -> None:
-        super().__init__(itf.NODE_NAME, **kwargs)
+        super().__init__(rig_topics.NODE_NAME, **kwargs)
         self.declare_parameter("preset", "base", _read_only("preset name (base, shallow, deep) "
                                                             "or preset YAML file"))
         preset_name = self.get_parameter("preset").value
@@ -63,37 +64,22 @@ class RigNode(Node):
             raise SystemExit(f"drill_sim_node: {exc}") from None
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
-        q = itf.qos(self.p["qos_reliability"])
-        self.pub_bit_wrench = self.create_publisher(WrenchStamped, itf.BIT_WRENCH, q)
-        self.pub_bit_twist = self.create_publisher(TwistStamped, itf.BIT_TWIST, q)
-        self.pub_flag = self.create_publisher(Bool, itf.BIT_STICK_SLIP, q)
-        self.pub_doc = self.create_publisher(Float64, itf.BIT_DEPTH_OF_CUT, q)
-        self.pub_hole = self.create_publisher(Float64, itf.BIT_HOLE_DEPTH, q)
-        self.pub_td_wrench = self.create_publisher(WrenchStamped, itf.TOP_DRIVE_WRENCH, q)
-        self.pub_joints = self.create_publisher(JointState, itf.JOINT_STATES, q)
-        self.pub_diag = self.create_publisher(DiagnosticArray, itf.DIAGNOSTICS, 10)
-        self.pub_clock = self.create_publisher(Clock, itf.CLOCK, 10) \
-            if self.p["publish_clock"] else None
-        self.sub_top_drive = self.create_subscription(TwistStamped, itf.CMD_TOP_DRIVE,
-                                                      self._on_top_drive, q)
-        self.sub_hook_load = self.create_subscription(WrenchStamped, itf.CMD_HOOK_LOAD,
-                                                      self._on_hook_load, q)
-        self.create_service(Trigger, itf.SRV_RESET, self._on_reset)
-        self.create_service(SetBool, itf.SRV_PAUSE, self._on_pause)
-        self.create_service(Trigger, itf.SRV_STEP, self._on_step)
+        # every topic and service from the table (wire.rig_topics)
+        self.with_clock = bool(self.p["publish_clock"])
+        self._enc = RigEncoders(self.with_clock)
+        self._outputs = [self._publisher(t) for t in self._enc.topics]   # in publishing order
+        self.pub_diag = self._publisher(rig_topics.of(rig_topics.DIAGNOSTICS)[0])
+        self._commands = {t.name: self.create_subscription(
+            message_class(t.type_name), t.name,
+            partial(self._on_command, t, attrgetter(*VECTOR_FIELDS[t.type_name])),
+            rclpy_qos(t.qos_for(self.p["qos_reliability"]))) for t in rig_topics.COMMANDS}
+        handlers = {"~/reset": self._on_reset, "~/pause": self._on_pause, "~/step": self._on_step}
+        for t in rig_topics.SERVICES:
+            self.create_service(service_class(t.type_name), t.name, handlers[t.name])
 
         self._record_error: str | None = None
-        # publishers in the order RigEncoders.sample returns their messages
-        pubs = (self.pub_bit_wrench, self.pub_bit_twist, self.pub_flag, self.pub_td_wrench,
-                self.pub_doc, self.pub_hole, self.pub_joints)
-        self._outputs: list[tuple[object, str]] = [
-            (pub, type_name) for pub, (_, type_name) in zip(pubs, rig_messages.OUTPUTS,
-                                                            strict=True)]
-        if self.pub_clock is not None:
-            self._outputs.insert(0, (self.pub_clock, rig_messages.CLOCK[1]))
-        self._output_names = [pub.topic_name for pub, _ in self._outputs]
-        self._enc = rig_messages.RigEncoders(with_clock=self.pub_clock is not None)
-        self._events_topic = self.get_fully_qualified_name() + "/events"   # recorded only
+        self._output_names = [pub.topic_name for pub in self._outputs]
+        self._events_topic = self.resolve_topic_name(rig_topics.EVENTS_TOPIC.name)
         self._offset_s = 0.0                     # simulated time before the last reset
         self.paused = False
         self._epoch_ns = time.time_ns()          # stamps = epoch + sim time without /clock
@@ -116,7 +102,11 @@ class RigNode(Node):
             f"rig '{self.preset.name}' ready: t* = {sc.time_s:.3f} s, dt = {self.rig.dt_s:.3g} s, "
             f"{self.p['rate_hz']:g} Hz, real-time factor "
             f"{'max' if self.max_speed else self.p['real_time_factor']}, "
-            f"{'publishing /clock' if self.pub_clock else 'wall-clock stamps'}")
+            f"{'publishing /clock' if self.with_clock else 'wall-clock stamps'}")
+
+    def _publisher(self, t: RigTopic):
+        return self.create_publisher(message_class(t.type_name), t.name,
+                                     rclpy_qos(t.qos_for(self.p["qos_reliability"])))
 
     # ---- time --------------------------------------------------------------------------
     @property
@@ -139,7 +129,7 @@ class RigNode(Node):
 
     def stamp_ns(self) -> int:
         sim_ns = round(self.sim_time_s * 1e9)
-        return sim_ns if self.pub_clock is not None else self._epoch_ns + sim_ns
+        return sim_ns if self.with_clock else self._epoch_ns + sim_ns
 
     # ---- the tick ----------------------------------------------------------------------
     def tick(self) -> None:
@@ -166,17 +156,14 @@ class RigNode(Node):
     def publish_sample(self, s: RigSample) -> None:
         """Encode the sample once; publish those bytes and record the very same bytes."""
         data = self._enc.sample(self.stamp_ns(), s)
-        for (pub, _), raw in zip(self._outputs, data, strict=True):
+        for pub, raw in zip(self._outputs, data, strict=True):
             pub.publish(raw)
         if self.recorder is not None:
             self.recorder.record_many(self._output_names, data, time.time_ns())
 
     def _start_recorder(self) -> SessionRecorder | None:
-        topics = {pub.topic_name: (type_name, self.p["qos_reliability"])
-                  for pub, type_name in self._outputs}
-        topics[self.sub_top_drive.topic_name] = ("geometry_msgs/msg/TwistStamped", "")
-        topics[self.sub_hook_load.topic_name] = ("geometry_msgs/msg/WrenchStamped", "")
-        topics[self._events_topic] = ("std_msgs/msg/String", "")
+        topics = {self.resolve_topic_name(t.name): (t.type_name, self.p["qos_reliability"])
+                  for t in rig_topics.recorded(self.with_clock)}
         g, sc = self.rig.groups, self.rig.scales
         context = {
             "parameters": {k: str(v) for k, v in sorted(self.p.items())},
@@ -188,7 +175,7 @@ class RigNode(Node):
         }
         context["session"] = {
             "preset": self.preset.name, "node": self.get_fully_qualified_name(),
-            "stamp_epoch_ns": str(0 if self.pub_clock is not None else self._epoch_ns),
+            "stamp_epoch_ns": str(0 if self.with_clock else self._epoch_ns),
             "events_topic": self._events_topic}
         try:
             rec = SessionRecorder(self.p["record"], topics,
@@ -206,49 +193,27 @@ class RigNode(Node):
     def _record_event(self, kind: str, values: dict[str, str] | None = None) -> None:
         """Resets and parameter changes, so a re-simulation can do them at the same point."""
         if self.recorder is not None:
-            now = time.time_ns()
-            self.recorder.record(self._events_topic, self._enc.event(json.dumps(
-                {"event": kind, "sim_time_s": self.sim_time_s, "values": values or {}})),
-                now, now)
-
-    def _record_command(self, sub, msg, six: tuple[float, ...]) -> None:
-        if self.recorder is not None:
-            stamp, now = msg.header.stamp, time.time_ns()
-            sent = stamp.sec * 1_000_000_000 + stamp.nanosec
-            self.recorder.record(sub.topic_name, self._enc.command(
-                msg.header.frame_id, stamp.sec, stamp.nanosec, six), now,
-                sent if sent >= 0 else now)         # a stamp before 1970 cannot be a time
+            self.recorder.record_event(self._events_topic, json.dumps(
+                {"event": kind, "sim_time_s": self.sim_time_s, "values": values or {}}))
 
     # ---- commands ----------------------------------------------------------------------
     def _refuse(self, what: str, value: object, expected: str) -> None:
         self.get_logger().warning(f"refused {what} = {value!r}: expected {expected}; holding "
                                   "the last valid command", throttle_duration_sec=1.0)
 
-    def _accepted(self, msg, value: float, what: str, limit: str, unit: str) -> bool:
-        """A command is used only if its frame is expected and its value finite and in range."""
-        refusal = session.command_refusal(msg.header.frame_id, value, self.p[limit], what, unit)
+    def _on_command(self, t: RigTopic, six_of: attrgetter, msg) -> None:
+        """Recorded as received; used only if the session's rule accepts it (frame expected,
+        value finite and in range), else the last valid command is held."""
+        six = six_of(msg)
+        header = msg.header
+        if self.recorder is not None:
+            self.recorder.record_command(self._commands[t.name].topic_name, header.frame_id,
+                                         header.stamp.sec, header.stamp.nanosec, six)
+        refusal = session.apply_command(self.rig, self.p, t.command, header.frame_id, six)
         if refusal is not None:
             self._refuse(*refusal)
-            return False
-        self._cmd_wall = time.monotonic()
-        return True
-
-    def _on_top_drive(self, msg: TwistStamped) -> None:
-        t = msg.twist
-        self._record_command(self.sub_top_drive, msg, (t.linear.x, t.linear.y, t.linear.z,
-                                                        t.angular.x, t.angular.y, t.angular.z))
-        value = msg.twist.angular.z
-        if self._accepted(msg, value, "top-drive speed twist.angular.z",
-                          "max_top_drive_speed_rad_s", "rad/s"):
-            self.rig.command(value, self.rig.commanded_hook_load_n)
-
-    def _on_hook_load(self, msg: WrenchStamped) -> None:
-        w = msg.wrench
-        self._record_command(self.sub_hook_load, msg, (w.force.x, w.force.y, w.force.z,
-                                                        w.torque.x, w.torque.y, w.torque.z))
-        value = msg.wrench.force.z
-        if self._accepted(msg, value, "hook load wrench.force.z", "max_hook_load_n", "N"):
-            self.rig.command(self.rig.commanded_speed_rad_s, value)
+        else:
+            self._cmd_wall = time.monotonic()
 
     # ---- services ----------------------------------------------------------------------
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):

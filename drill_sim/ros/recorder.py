@@ -1,6 +1,7 @@
 """In-node recording: every topic the node publishes and every command it receives, into a
 rosbag2 MCAP bag (``drill_sim.bag.writer``), with the session's context as MCAP metadata.
-Outputs are recorded as the very bytes the node published.
+Outputs are recorded as the very bytes the node published; commands and events are encoded
+here (``drill_sim.wire.cdr``).
 
 Recording problems (full disk, unwritable path) stop the recording with a clear error and leave
 the simulation running; the bag written so far stays readable.
@@ -14,7 +15,9 @@ import time
 from pathlib import Path
 
 from .. import __version__
-from ..bag.writer import BagError, BagWriter, qos_profile
+from ..bag.writer import BagError, BagWriter
+from ..wire import WireError, cdr
+from ..wire.qos import qos_profile
 
 
 class SessionRecorder:
@@ -33,13 +36,27 @@ class SessionRecorder:
                                 split_size_bytes=split_size_bytes)
         for name, (type_name, rel) in topics.items():
             self.writer.add_topic(name, type_name, [qos_profile(rel or reliability)])
+        self._encode_command = cdr.StampedVectorsByFrame()
 
-    def record(self, topic: str, data: bytes, log_time_ns: int, publish_time_ns: int) -> None:
-        """One CDR-serialized message."""
+    def record_command(self, topic: str, frame_id: str, sec: int, nanosec: int,
+                       six: tuple[float, ...]) -> None:
+        """A command as received (TwistStamped or WrenchStamped, its six float64), logged now
+        and published at its stamp (now if stamped before 1970: that cannot be a time)."""
         if self.error is None:
+            now, sent = time.time_ns(), sec * 1_000_000_000 + nanosec
             try:
-                self.writer.write(topic, data, log_time_ns, publish_time_ns)
-            except (OSError, BagError) as exc:
+                self.writer.write(topic, self._encode_command(frame_id, sec, nanosec, six), now,
+                                  sent if sent >= 0 else now)
+            except (OSError, BagError, WireError) as exc:
+                self._stop(exc)
+
+    def record_event(self, topic: str, text: str) -> None:
+        """A session event (std_msgs/String), logged and published now."""
+        if self.error is None:
+            now = time.time_ns()
+            try:
+                self.writer.write(topic, cdr.string(text), now, now)
+            except (OSError, BagError, WireError) as exc:
                 self._stop(exc)
 
     def record_many(self, topics: list[str], data: list[bytes], time_ns: int) -> None:

@@ -23,11 +23,11 @@ from rclpy.qos import QoSProfile
 from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock
 
-from ..bag import cdr
 from ..bag.mcap_scan import McapScan
 from ..bag.reader import info, mcap_files
 from ..bag.writer import BagError
 from ..cli.progress import StatusLine
+from ..wire import cdr
 from .stopping import init_stoppable
 from .topics import UnknownType, message_class, profile_from_dicts
 
