@@ -97,6 +97,7 @@ TOPICS: tuple[RigTopic, ...] = (
                        ("bit_speed_rad_s", "rad/s"), ("rop_m_s", "m/s"))
              + _joints("effort", ("surface_torque_nm", "N m"), ("hook_load_n", "N"),
                        ("tob_nm", "N m"), ("wob_n", "N"))),
+    RigTopic("~/bit/regime", "std_msgs/msg/UInt8", OUTPUT, fields=(Field("data", "regime", ""),)),
     RigTopic("~/cmd/top_drive", "geometry_msgs/msg/TwistStamped", COMMAND, command="top_drive"),
     RigTopic("~/cmd/hook_load", "geometry_msgs/msg/WrenchStamped", COMMAND, command="hook_load"),
     RigTopic("/diagnostics", "diagnostic_msgs/msg/DiagnosticArray", DIAGNOSTICS, fixed_qos=True),
