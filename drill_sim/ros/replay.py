@@ -19,7 +19,6 @@ import rclpy
 import yaml
 from rclpy.duration import Duration
 from rclpy.node import Node
-from rclpy.qos import QoSProfile
 from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock
 
@@ -27,9 +26,9 @@ from ..bag.mcap_scan import McapScan
 from ..bag.reader import info, mcap_files
 from ..bag.writer import BagError
 from ..cli.progress import StatusLine
-from ..wire import cdr
+from ..wire import cdr, rig_topics
 from .stopping import init_stoppable
-from .topics import UnknownType, message_class, profile_from_dicts
+from .topics import UnknownType, message_class, profile_from_dicts, rclpy_qos
 
 
 class Player(Node):
@@ -53,7 +52,8 @@ class Player(Node):
             qos = profile_from_dicts(profiles if isinstance(profiles, list) else None,
                                      args.queue_depth)
             self.publishers_by_topic[name] = self.create_publisher(cls, name, qos)
-        self.clock_pub = self.create_publisher(Clock, "/clock", QoSProfile(depth=10)) \
+        clock = rig_topics.CLOCK_TOPIC
+        self.clock_pub = self.create_publisher(Clock, clock.name, rclpy_qos(clock.qos)) \
             if args.clock else None
         self.encode_clock = cdr.clock()
         self.sent = 0
