@@ -20,6 +20,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from std_srvs.srv import SetBool, Trigger
 
 from ..core import NoSteadyDrilling, ParameterError, session
@@ -53,7 +54,7 @@ class RigNode(Node):
         self.with_clock = bool(self.p["publish_clock"])
         self._enc = RigEncoders(self.with_clock)
         self._outputs = [self._publisher(t) for t in self._enc.topics]
-        self._diagnostics = self._publisher(rig_topics.of(rig_topics.DIAGNOSTICS)[0])
+        self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
         for t in rig_topics.COMMANDS:
             self.create_subscription(
                 message_class(t.type_name), t.name,
@@ -84,12 +85,13 @@ class RigNode(Node):
             f"{'max' if self.pacer.max_speed else self.p['real_time_factor']}, "
             f"{'publishing /clock' if self.with_clock else 'wall-clock stamps'}")
 
-    def _publisher(self, t: RigTopic):
+    def _publisher(self, t: RigTopic) -> Publisher:
         return self.create_publisher(message_class(t.type_name), t.name,
                                      rclpy_qos(t.qos_for(self.p["qos_reliability"])))
 
     @staticmethod
     def _max_speed(p: dict[str, object]) -> bool:
+        """Ticks back to back: max_speed applies only with publish_clock (msg_docs/node.md)."""
         return bool(p["max_speed"] and p["publish_clock"])
 
     # ---- time --------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""The rig node's topics and services: ONE table, the source of truth for the node, the driver,
+"""The rig node's topics and services: one table, the source of truth for the node, the driver,
 the monitor, the in-node recorder, the bag tools and msg_docs/node.md.
 
 Each entry gives the name (node-relative ``~/...`` so ``-r __ns:=/rig1`` namespaces a whole rig,
@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from . import WireError
 from .qos import Qos
 
 NODE_NAME = "drill_sim"
@@ -46,6 +47,8 @@ class Field:
 
 @dataclass(frozen=True)
 class RigTopic:
+    """One topic or service of the rig node, as the node offers it."""
+
     name: str                          # "~/bit/wrench" (node-relative) or "/clock"
     type_name: str                     # pkg/msg/Type or pkg/srv/Type
     direction: str
@@ -63,7 +66,7 @@ class RigTopic:
     def qos_for(self, reliability: str) -> Qos:
         """The QoS this topic is offered with when the node's qos_reliability is ``reliability``."""
         if self.qos is None:
-            raise ValueError(f"{self.name} is a service: no QoS")
+            raise WireError(f"{self.name} is a service: no QoS")
         return self.qos if self.fixed_qos else self.qos.with_reliability(reliability)
 
 
@@ -124,6 +127,7 @@ def of(direction: str) -> tuple[RigTopic, ...]:
 CLOCK_TOPIC = topic("/clock")
 JOINT_STATES = topic("~/joint_states")
 BIT_STICK_SLIP = topic("~/bit/stick_slip")
+DIAGNOSTICS_TOPIC = topic("/diagnostics")
 EVENTS_TOPIC = topic("~/events")
 OUTPUTS = of(OUTPUT)
 COMMANDS = of(COMMAND)
