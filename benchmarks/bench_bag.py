@@ -18,9 +18,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from drill_sim.bag.rig_messages import OUTPUTS, RigEncoders
 from drill_sim.bag.writer import BagWriter
 from drill_sim.core import RPM, Rig, load_preset
+from drill_sim.wire.rig_messages import RigEncoders
 
 BIN = Path(sys.executable).parent
 EPOCH_NS = 1_700_000_000_000_000_000
@@ -31,12 +31,12 @@ def write_session(path: Path, seconds: float, rate_hz: float = 1000.0) -> int:
     rig = Rig(preset.rig)
     rig.start_steady(60 * RPM, preset.rig.submerged_weight_n - 100e3)
     enc = RigEncoders(with_clock=False)
-    topics = [f"/drill_sim/{name}" for name, _ in OUTPUTS]
+    topics = [t.under("/drill_sim") for t in enc.topics]
     n = int(seconds * rate_hz)
     t0 = time.perf_counter()
     with BagWriter(path, metadata={"session": {"preset": "base"}}) as w:
-        for topic, (_, type_name) in zip(topics, OUTPUTS, strict=True):
-            w.add_topic(topic, type_name)
+        for topic, t in zip(topics, enc.topics, strict=True):
+            w.add_topic(topic, t.type_name)
         write = w.write
         for k in range(1, n + 1):
             rig.advance_to(k / rate_hz)

@@ -7,9 +7,9 @@ import math
 from geometry_msgs.msg import TwistStamped
 from rclpy.serialization import serialize_message
 
-from drill_sim.bag.rig_messages import OUTPUTS, RigEncoders
 from drill_sim.bag.writer import BagWriter
 from drill_sim.core import RPM, Rig, RigSample, load_preset
+from drill_sim.wire.rig_messages import RigEncoders
 
 T0_NS = 1_700_000_000_000_000_000
 
@@ -24,11 +24,11 @@ def rig_bag(path, ticks: int, *, prefix: str = "/drill_sim", command_every: int 
     rig = Rig(preset.rig)
     rig.start_steady(60 * RPM, preset.rig.submerged_weight_n - 100e3)
     enc = RigEncoders(with_clock=False)
-    topics = [f"{prefix}/{name}" for name, _ in OUTPUTS]
+    topics = [t.under(prefix) for t in enc.topics]
     samples = []
     with BagWriter(path, chunk_size=chunk_size, flush_interval_s=math.inf) as w:  # by size only
-        for topic, (_, type_name) in zip(topics, OUTPUTS, strict=True):
-            w.add_topic(topic, type_name)
+        for topic, t in zip(topics, enc.topics, strict=True):
+            w.add_topic(topic, t.type_name)
         w.add_topic(f"{prefix}/cmd/top_drive", "geometry_msgs/msg/TwistStamped")
         for k in range(1, ticks + 1):
             rig.advance_to(k / rate_hz)

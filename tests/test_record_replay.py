@@ -82,9 +82,9 @@ def test_replay_loses_no_message_and_keeps_the_timing(ros, tmp_path, rate):
 
 
 def test_a_rig_session_replayed_at_10x_into_the_recorder_comes_back_byte_for_byte(ros, tmp_path):
-    """Three seconds of a rig session (7 topics at 1 kHz, 21 000 messages) replayed at 10x
-    (70 000 messages/s asked; the player goes as fast as it can and never skips) into
-    drill_sim_record: every message arrives, in order, with the same bytes."""
+    """Three seconds of a rig session (every output topic at 1 kHz, 3000 messages each)
+    replayed at 10x (the player goes as fast as it can and never skips) into drill_sim_record:
+    every message arrives, in order, with the same bytes."""
     rig_bag(tmp_path / "session", 3000, prefix="/tenx")
     recorded = tmp_path / "recorded"
     with NodeProcess("drill_sim_record", "-e", "^/tenx/", "-o", str(recorded)) as rec:

@@ -17,10 +17,12 @@ import math
 import struct
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 from ..core import NoSteadyDrilling, ParameterError, session
 from ..core.rig import Rig, RigSample
+from ..wire import cdr, rig_topics
 from .bag import Bag, opened
 from .errors import BagError
 from .series import JOINT_ARRAY_START, JOINT_FIELDS, JOINT_VALUES_F64, joint_state_layout
@@ -85,9 +87,8 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
     p = {k: session.parse_value(v) for k, v in meta["parameters"].items()}
     node = meta["session"]["node"]
     epoch_ns = int(meta["session"].get("stamp_epoch_ns", "0"))
-    topics = {"joints": f"{node}/joint_states", "speed": f"{node}/cmd/top_drive",
-              "hook": f"{node}/cmd/hook_load",
-              "events": meta["session"].get("events_topic", f"{node}/events")}
+    topics = {"joints": rig_topics.JOINT_STATES.under(node),
+              "events": meta["session"].get("events_topic", rig_topics.EVENTS_TOPIC.under(node))}
     if topics["joints"] not in found.topics:
         raise BagError(f"bag {bag.path}: no {topics['joints']} to compare with")
     result = ResimResult(bag.path, "sim-time" if p.get("publish_clock") else "real-time",
@@ -100,8 +101,8 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
             from None
     run = _Rerun(rig, p, epoch_ns, result)
     total = max(found.topics[topics["joints"]].count, 1)
-    handlers = {topics["joints"]: run.sample, topics["speed"]: run.speed,
-                topics["hook"]: run.hook, topics["events"]: run.event}
+    handlers = {topics["joints"]: run.sample, topics["events"]: run.event}
+    handlers.update({t.under(node): partial(run.command, t.command) for t in rig_topics.COMMANDS})
     for m in bag.messages(set(handlers), result.problems):
         handlers[m.topic](m.data)
         if progress is not None and m.topic == topics["joints"]:
@@ -139,22 +140,13 @@ class _Rerun:
                 if r.max_difference[name] > r.worst[1]:
                     r.worst = (name, r.max_difference[name], t)
 
-    def speed(self, data: bytes) -> None:
-        frame, six = _stamped_vectors(data)
-        if self._accepted(frame, six[5], "max_top_drive_speed_rad_s"):
-            self.rig.command(six[5], self.rig.commanded_hook_load_n)
-
-    def hook(self, data: bytes) -> None:
-        frame, six = _stamped_vectors(data)
-        if self._accepted(frame, six[2], "max_hook_load_n"):
-            self.rig.command(self.rig.commanded_speed_rad_s, six[2])
-
-    def _accepted(self, frame: str, value: float, limit: str) -> bool:
-        if session.command_refusal(frame, value, self.p[limit], "", "") is None:
+    def command(self, name: str, data: bytes) -> None:
+        """A recorded command, accepted or refused by the node's own rule."""
+        frame, _, _, six = cdr.decode_stamped_vectors(data)
+        if session.apply_command(self.rig, self.p, name, frame, six) is None:
             self.result.commands += 1
-            return True
-        self.result.refused += 1
-        return False
+        else:
+            self.result.refused += 1
 
     def event(self, data: bytes) -> None:
         (n,) = struct.unpack_from("<I", data, 4)
@@ -170,11 +162,3 @@ class _Rerun:
             self.p = new
         self.result.events.append(kind)
 
-
-def _stamped_vectors(data: bytes) -> tuple[str, tuple[float, ...]]:
-    """frame_id and the six float64 of a TwistStamped or WrenchStamped."""
-    (n,) = struct.unpack_from("<I", data, 12)
-    frame = data[16:16 + n - 1].decode("utf-8", "replace")
-    at = 16 + n
-    at += (-(at - 4)) % 8
-    return frame, struct.unpack_from("<6d", data, at)

@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..wire.rig_topics import JOINT_NAMES, JOINT_STATES
 from .bag import Bag, opened
 from .errors import BagError
 from .mcap_index import fixed_size_channel
-from .rig_messages import JOINT_NAMES
 
-JOINT_STATE = "sensor_msgs/msg/JointState"
+JOINT_STATE = JOINT_STATES.type_name
 # where each quantity sits in the node's joint_states (msg_docs/node.md): (array, joint index)
 JOINT_FIELDS = {
     "top_drive_speed_rad_s": ("velocity", 0), "surface_torque_nm": ("effort", 0),

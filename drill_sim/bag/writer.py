@@ -15,22 +15,13 @@ from pathlib import Path
 
 import yaml
 
+from ..wire.qos import qos_profile
 from .errors import BagError
 from .mcap_file import McapFileWriter
 from .metadata import bag_information, file_entry, write_metadata_yaml
 from .schema import message_definition, type_hash
 
 _NS_LIMIT = 1 << 64
-INFINITE = {"sec": 9223372036, "nsec": 854775807}   # rmw's "unspecified" duration
-
-
-def qos_profile(reliability: str = "reliable", depth: int = 10,
-                durability: str = "volatile") -> dict:
-    """One offered QoS profile in rosbag2's metadata-version-9 form."""
-    return {"history": "keep_last", "depth": depth, "reliability": reliability,
-            "durability": durability, "deadline": dict(INFINITE), "lifespan": dict(INFINITE),
-            "liveliness": "automatic", "liveliness_lease_duration": dict(INFINITE),
-            "avoid_ros_namespace_conventions": False}
 
 
 def qos_yaml(profiles: list[dict]) -> str:

@@ -7,7 +7,8 @@ re-run does exactly what the node did.
 from __future__ import annotations
 
 import math
-from dataclasses import fields
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
 
 from .parameters import ParameterError, RigParameters
 from .rig import Rig
@@ -41,6 +42,29 @@ def start(rig: Rig, p: dict[str, object]) -> None:
         rig.start_at_rest(p["initial_gap_m"])
 
 
+@dataclass(frozen=True)
+class CommandRule:
+    """Which field of a command message carries the command, and the parameter that limits it.
+
+    The commands are TwistStamped/WrenchStamped messages, taken as their six float64 in message
+    order (linear or force x, y, z, then angular or torque x, y, z); ``index`` is the field's
+    place among them, ``slot`` the argument of ``Rig.command`` it sets (0 speed, 1 hook load)."""
+
+    what: str            # for refusals
+    field: str           # message field path
+    index: int
+    slot: int
+    limit: str           # parameter: the largest value accepted
+    unit: str
+
+
+COMMANDS = {
+    "top_drive": CommandRule("top-drive speed", "twist.angular.z", 5, 0,
+                             "max_top_drive_speed_rad_s", "rad/s"),
+    "hook_load": CommandRule("hook load", "wrench.force.z", 2, 1, "max_hook_load_n", "N"),
+}
+
+
 def command_refusal(frame_id: str, value: float, high: float, what: str, unit: str
                     ) -> tuple[str, object, str] | None:
     """Why a command is refused, as (what, value, expected), or None if it is used: the frame
@@ -50,6 +74,22 @@ def command_refusal(frame_id: str, value: float, high: float, what: str, unit: s
     if not (math.isfinite(value) and 0.0 <= value <= high):
         return f"{what} [{unit}]", value, f"a finite value in [0, {high:g}] {unit}"
     return None
+
+
+def apply_command(rig: Rig, p: dict[str, object], name: str, frame_id: str,
+                  six: Sequence[float]) -> tuple[str, object, str] | None:
+    """Command ``name`` (a key of COMMANDS) arriving as ``six`` with ``frame_id``: held by the
+    rig from now on if accepted (None), else the refusal as ``command_refusal`` gives it and the
+    rig untouched. The node and the re-simulation of its bags both decide here."""
+    rule = COMMANDS[name]
+    value = six[rule.index]
+    refusal = command_refusal(frame_id, value, p[rule.limit], f"{rule.what} {rule.field}",
+                              rule.unit)
+    if refusal is None:
+        held = [rig.commanded_speed_rad_s, rig.commanded_hook_load_n]
+        held[rule.slot] = value
+        rig.command(*held)
+    return refusal
 
 
 def apply_changes(rig: Rig, old: dict[str, object], new: dict[str, object]) -> set[str]:

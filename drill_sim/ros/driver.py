@@ -19,7 +19,11 @@ from rclpy.utilities import remove_ros_args
 
 from ..core import ParameterError
 from ..core.scenario import Scenario, load_scenario, scenario_names
-from . import interface as itf
+from ..wire import rig_topics
+from ..wire.qos import RELIABILITIES
+from .topics import rclpy_qos
+
+SPEED, HOOK = rig_topics.COMMAND_BY_RULE["top_drive"], rig_topics.COMMAND_BY_RULE["hook_load"]
 
 
 class ScenarioDriver(Node):
@@ -27,15 +31,16 @@ class ScenarioDriver(Node):
                  reliability: str = "reliable") -> None:
         super().__init__("drill_sim_drive")
         self.scenario, self.loop = scenario, loop
-        q = itf.qos(reliability)
-        self.pub_speed = self.create_publisher(TwistStamped, f"{rig}/cmd/top_drive", q)
-        self.pub_hook = self.create_publisher(WrenchStamped, f"{rig}/cmd/hook_load", q)
+        self.pub_speed = self.create_publisher(TwistStamped, SPEED.under(rig),
+                                               rclpy_qos(SPEED.qos_for(reliability)))
+        self.pub_hook = self.create_publisher(WrenchStamped, HOOK.under(rig),
+                                              rclpy_qos(HOOK.qos_for(reliability)))
         self.params_client = self.create_client(GetParameters, f"{rig}/get_parameters")
         self.submerged_weight_n: float | None = None
         self.t0_ns: int | None = None
         self.done = False
         self.speed_msg, self.hook_msg = TwistStamped(), WrenchStamped()
-        self.speed_msg.header.frame_id = self.hook_msg.header.frame_id = itf.FRAME_TOP_DRIVE
+        self.speed_msg.header.frame_id = self.hook_msg.header.frame_id = rig_topics.FRAME_TOP_DRIVE
         self.create_timer(1.0 / rate_hz, self._tick)
         self._pending = None
 
@@ -82,11 +87,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="drill_sim_drive", description=__doc__.split("\n")[0])
     parser.add_argument("scenario", nargs="?", default="tag_bottom",
                         help=f"shipped ({', '.join(scenario_names())}) or a scenario YAML file")
-    parser.add_argument("--rig", default=itf.NODE_NAME, help="name of the rig node")
+    parser.add_argument("--rig", default=rig_topics.NODE_NAME, help="name of the rig node")
     parser.add_argument("--rate-hz", type=float, default=50.0, help="command rate [Hz]")
     parser.add_argument("--loop", action="store_true", help="repeat the scenario")
-    parser.add_argument("--qos-reliability", choices=("reliable", "best_effort"),
-                        default="reliable")
+    parser.add_argument("--qos-reliability", choices=RELIABILITIES, default=RELIABILITIES[0])
     args = parser.parse_args(remove_ros_args(argv)[1:])
     if not 0 < args.rate_hz <= 1000:
         parser.error(f"--rate-hz = {args.rate_hz:g}: expected 0 < rate <= 1000")

@@ -9,16 +9,20 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 
 from ..bag.series import JOINT_FIELDS, RigSeries
-from . import interface as itf
+from ..wire import rig_topics
+from ..wire.qos import RELIABLE
+from .topics import rclpy_qos
 
 
 class Monitor(Node):
-    def __init__(self, rig: str = itf.NODE_NAME) -> None:
+    def __init__(self, rig: str = rig_topics.NODE_NAME) -> None:
         super().__init__("drill_sim_monitor")
-        q = itf.qos("reliable", depth=1000)
-        self.topic = self.resolve_topic_name(f"{rig}/joint_states")
-        self.create_subscription(JointState, self.topic, self._on_joints, q)
-        self.create_subscription(Bool, f"{rig}/bit/stick_slip", self._on_flag, q)
+        joints, flag = rig_topics.JOINT_STATES, rig_topics.BIT_STICK_SLIP
+        self.topic = self.resolve_topic_name(joints.under(rig))
+        self.create_subscription(JointState, self.topic, self._on_joints,
+                                 rclpy_qos(joints.qos_for(RELIABLE).with_depth(1000)))
+        self.create_subscription(Bool, flag.under(rig), self._on_flag,
+                                 rclpy_qos(flag.qos_for(RELIABLE).with_depth(1000)))
         # one row per sample: stamp [s], position[4], velocity[4], effort[4], flag; grows x2
         self._rows = np.zeros((1 << 16, 14))
         self.count = 0

@@ -1,137 +1,100 @@
 """``drill_sim_node``: the rig as a ROS 2 node. Surface commands in, bit and surface response out.
 
-A thin adapter: each tick advances the core ``Rig`` to the current simulation time and
-publishes its sample. Commands are validated in their callbacks and held (zero-order hold)
-until the next tick; a refused command never reaches the model.
+A thin adapter: each tick advances the core ``Rig`` to the simulated time the ``Pacer`` gives
+and publishes its sample, encoded once (``wire.rig_messages``). Topics and services come from
+the table in ``wire.rig_topics``; the rules live in ``core``: commands and parameter changes in
+``session``, pacing in ``pacing``, the diagnostics policy in ``diagnostics``; recording in
+``recorder``. Commands are validated in their callbacks and held (zero-order hold) until the
+next tick; a refused command never reaches the model.
 """
 
 from __future__ import annotations
 
-import json
-import math
 import sys
 import time
+from functools import partial
+from operator import attrgetter
 
-import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import TwistStamped, WrenchStamped
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
-from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState
-from std_msgs.msg import Bool, Float64
+from rclpy.publisher import Publisher
 from std_srvs.srv import SetBool, Trigger
 
-from ..bag import rig_messages
-from ..bag.writer import BagError
-from ..core import NoSteadyDrilling, ParameterError, load_preset, session
+from ..core import NoSteadyDrilling, ParameterError, session
+from ..core.diagnostics import rig_status
+from ..core.pacing import Pacer
 from ..core.rig import RigSample
-from . import interface as itf
-from .parameters import specs
+from ..wire import rig_topics
+from ..wire.cdr import VECTOR_FIELDS
+from ..wire.rig_messages import RigEncoders
+from ..wire.rig_topics import RigTopic
+from . import parameters
 from .recorder import SessionRecorder
 from .stopping import init_stoppable
-
-REGIME_NAMES = {True: "stick-slip", False: "drilling"}
+from .topics import message_class, rclpy_qos, service_class
 
 
 class RigNode(Node):
     """The drilling rig node. Parameters, topics and services: msg_docs/node.md."""
 
     def __init__(self, **kwargs) -> None:
-        super().__init__(itf.NODE_NAME, **kwargs)
-        self.declare_parameter("preset", "base", _read_only("preset name (base, shallow, deep) "
-                                                            "or preset YAML file"))
-        preset_name = self.get_parameter("preset").value
+        super().__init__(rig_topics.NODE_NAME, **kwargs)
         try:
-            self.preset = load_preset(preset_name)
-        except ParameterError as exc:
-            raise SystemExit(f"drill_sim_node: {exc}") from None
-        self._specs = {s.name: s for s in specs(self.preset)}
-        for spec in self._specs.values():
-            self.declare_parameter(spec.name, spec.default, spec.descriptor())
-        self.p = {name: self.get_parameter(name).value for name in self._specs}
-        for name, spec in self._specs.items():
-            if spec.choices and self.p[name] not in spec.choices:
-                raise SystemExit(f"drill_sim_node: parameter {name} = {self.p[name]!r}: expected "
-                                 f"one of {', '.join(spec.choices)}")
-        try:
+            self.preset, self._specs, self.p = parameters.declare(self)
             self.rig = session.make_rig(self.p)
             session.start(self.rig, self.p)
         except (ParameterError, NoSteadyDrilling) as exc:
             raise SystemExit(f"drill_sim_node: {exc}") from None
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
-        q = itf.qos(self.p["qos_reliability"])
-        self.pub_bit_wrench = self.create_publisher(WrenchStamped, itf.BIT_WRENCH, q)
-        self.pub_bit_twist = self.create_publisher(TwistStamped, itf.BIT_TWIST, q)
-        self.pub_flag = self.create_publisher(Bool, itf.BIT_STICK_SLIP, q)
-        self.pub_doc = self.create_publisher(Float64, itf.BIT_DEPTH_OF_CUT, q)
-        self.pub_hole = self.create_publisher(Float64, itf.BIT_HOLE_DEPTH, q)
-        self.pub_td_wrench = self.create_publisher(WrenchStamped, itf.TOP_DRIVE_WRENCH, q)
-        self.pub_joints = self.create_publisher(JointState, itf.JOINT_STATES, q)
-        self.pub_diag = self.create_publisher(DiagnosticArray, itf.DIAGNOSTICS, 10)
-        self.pub_clock = self.create_publisher(Clock, itf.CLOCK, 10) \
-            if self.p["publish_clock"] else None
-        self.sub_top_drive = self.create_subscription(TwistStamped, itf.CMD_TOP_DRIVE,
-                                                      self._on_top_drive, q)
-        self.sub_hook_load = self.create_subscription(WrenchStamped, itf.CMD_HOOK_LOAD,
-                                                      self._on_hook_load, q)
-        self.create_service(Trigger, itf.SRV_RESET, self._on_reset)
-        self.create_service(SetBool, itf.SRV_PAUSE, self._on_pause)
-        self.create_service(Trigger, itf.SRV_STEP, self._on_step)
+        # every topic and service from the table, outputs in publishing order
+        self.with_clock = bool(self.p["publish_clock"])
+        self._enc = RigEncoders(self.with_clock)
+        self._outputs = [self._publisher(t) for t in self._enc.topics]
+        self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
+        for t in rig_topics.COMMANDS:
+            self.create_subscription(
+                message_class(t.type_name), t.name,
+                partial(self._on_command, t, attrgetter(*VECTOR_FIELDS[t.type_name])),
+                rclpy_qos(t.qos_for(self.p["qos_reliability"])))
+        handlers = {"~/reset": self._on_reset, "~/pause": self._on_pause, "~/step": self._on_step}
+        for t in rig_topics.SERVICES:
+            self.create_service(service_class(t.type_name), t.name, handlers[t.name])
 
-        self._record_error: str | None = None
-        # publishers in the order RigEncoders.sample returns their messages
-        pubs = (self.pub_bit_wrench, self.pub_bit_twist, self.pub_flag, self.pub_td_wrench,
-                self.pub_doc, self.pub_hole, self.pub_joints)
-        self._outputs: list[tuple[object, str]] = [
-            (pub, type_name) for pub, (_, type_name) in zip(pubs, rig_messages.OUTPUTS,
-                                                            strict=True)]
-        if self.pub_clock is not None:
-            self._outputs.insert(0, (self.pub_clock, rig_messages.CLOCK[1]))
-        self._output_names = [pub.topic_name for pub, _ in self._outputs]
-        self._enc = rig_messages.RigEncoders(with_clock=self.pub_clock is not None)
-        self._events_topic = self.get_fully_qualified_name() + "/events"   # recorded only
         self._offset_s = 0.0                     # simulated time before the last reset
         self.paused = False
         self._epoch_ns = time.time_ns()          # stamps = epoch + sim time without /clock
-        self.recorder = self._start_recorder() if self.p["record"] else None
-        self._anchor()
-        self._tick_count = self._overruns = 0
-        self._last_tick = None
-        self._periods = np.zeros(int(4 * self.p["rate_hz"] * self.p["diagnostics_period_s"]) + 8)
-        self._n_periods = 0
-        self._diag_ticks = 0
-        self._diag_wall = time.monotonic()
-        self._diag_sim = self.rig.time_s
+        self.recorder = SessionRecorder(
+            p=self.p, rig=self.rig, preset=self.preset.name,
+            node=self.get_fully_qualified_name(), resolve=self.resolve_topic_name,
+            stamp_epoch_ns=0 if self.with_clock else self._epoch_ns,
+            logger=self.get_logger()) if self.p["record"] else None
+        self.pacer = Pacer(self.p["rate_hz"], self.p["real_time_factor"], self._max_speed(self.p),
+                           self.p["diagnostics_period_s"], self.rig.time_s)
         self._cmd_wall = time.monotonic()
         self.timer = None
-        if not self.max_speed:
+        if not self.pacer.max_speed:
             self.timer = self.create_timer(1.0 / self.p["rate_hz"], self.tick)
         self.create_timer(self.p["diagnostics_period_s"], self.publish_diagnostics)
-        sc = self.rig.scales
         self.get_logger().info(
-            f"rig '{self.preset.name}' ready: t* = {sc.time_s:.3f} s, dt = {self.rig.dt_s:.3g} s, "
-            f"{self.p['rate_hz']:g} Hz, real-time factor "
-            f"{'max' if self.max_speed else self.p['real_time_factor']}, "
-            f"{'publishing /clock' if self.pub_clock else 'wall-clock stamps'}")
+            f"rig '{self.preset.name}' ready: t* = {self.rig.scales.time_s:.3f} s, "
+            f"dt = {self.rig.dt_s:.3g} s, {self.p['rate_hz']:g} Hz, real-time factor "
+            f"{'max' if self.pacer.max_speed else self.p['real_time_factor']}, "
+            f"{'publishing /clock' if self.with_clock else 'wall-clock stamps'}")
+
+    def _publisher(self, t: RigTopic) -> Publisher:
+        return self.create_publisher(message_class(t.type_name), t.name,
+                                     rclpy_qos(t.qos_for(self.p["qos_reliability"])))
+
+    @staticmethod
+    def _max_speed(p: dict[str, object]) -> bool:
+        """Ticks back to back: max_speed applies only with publish_clock (msg_docs/node.md)."""
+        return bool(p["max_speed"] and p["publish_clock"])
 
     # ---- time --------------------------------------------------------------------------
-    @property
-    def max_speed(self) -> bool:
-        return bool(self.p["max_speed"] and self.p["publish_clock"])
-
-    def _anchor(self) -> None:
-        self._wall0 = time.monotonic()
-        self._sim0 = self.rig.time_s
-
-    def sim_target(self) -> float:
-        if self.max_speed:
-            return self.rig.time_s + 1.0 / self.p["rate_hz"]
-        return self._sim0 + (time.monotonic() - self._wall0) * self.p["real_time_factor"]
-
     @property
     def sim_time_s(self) -> float:
         """Simulated time since the node started [s]; it keeps running across resets."""
@@ -139,116 +102,40 @@ class RigNode(Node):
 
     def stamp_ns(self) -> int:
         sim_ns = round(self.sim_time_s * 1e9)
-        return sim_ns if self.pub_clock is not None else self._epoch_ns + sim_ns
+        return sim_ns if self.with_clock else self._epoch_ns + sim_ns
 
     # ---- the tick ----------------------------------------------------------------------
     def tick(self) -> None:
-        now = time.monotonic()
-        if self._last_tick is not None:
-            period = now - self._last_tick
-            if self._n_periods < self._periods.size:
-                self._periods[self._n_periods] = period
-                self._n_periods += 1
-            if period > 1.5 / self.p["rate_hz"] and not self.max_speed:
-                self._overruns += 1
-        self._last_tick = now
+        self.pacer.tick_started()
         if self.paused:
             return
-        target = self.sim_target()
-        # never try to catch up more than 0.1 s of simulated time in one tick
-        self.rig.advance_to(min(target, self.rig.time_s + 0.1 * self.p["real_time_factor"]
-                                + 1.0 / self.p["rate_hz"]))
-        if target - self.rig.time_s > 0.1 * self.p["real_time_factor"]:
-            self._anchor()                         # fell behind: drop the backlog
+        self.rig.advance_to(self.pacer.target(self.rig.time_s))
+        self.pacer.advanced(self.rig.time_s)
         self.publish_sample(self.rig.sample())
-        self._tick_count += 1
 
     def publish_sample(self, s: RigSample) -> None:
         """Encode the sample once; publish those bytes and record the very same bytes."""
         data = self._enc.sample(self.stamp_ns(), s)
-        for (pub, _), raw in zip(self._outputs, data, strict=True):
+        for pub, raw in zip(self._outputs, data, strict=True):
             pub.publish(raw)
         if self.recorder is not None:
-            self.recorder.record_many(self._output_names, data, time.time_ns())
-
-    def _start_recorder(self) -> SessionRecorder | None:
-        topics = {pub.topic_name: (type_name, self.p["qos_reliability"])
-                  for pub, type_name in self._outputs}
-        topics[self.sub_top_drive.topic_name] = ("geometry_msgs/msg/TwistStamped", "")
-        topics[self.sub_hook_load.topic_name] = ("geometry_msgs/msg/WrenchStamped", "")
-        topics[self._events_topic] = ("std_msgs/msg/String", "")
-        g, sc = self.rig.groups, self.rig.scales
-        context = {
-            "parameters": {k: str(v) for k, v in sorted(self.p.items())},
-            "groups": {"n": str(g.n), "psi": repr(g.psi), "lambda": repr(g.lam),
-                       "beta": repr(g.beta)},
-            "scales": {"time_s": repr(sc.time_s), "length_m": repr(sc.length_m),
-                       "force_n": repr(sc.force_n),
-                       "stiffness_nm_per_rad": repr(sc.stiffness_nm_per_rad)},
-        }
-        context["session"] = {
-            "preset": self.preset.name, "node": self.get_fully_qualified_name(),
-            "stamp_epoch_ns": str(0 if self.pub_clock is not None else self._epoch_ns),
-            "events_topic": self._events_topic}
-        try:
-            rec = SessionRecorder(self.p["record"], topics,
-                                  reliability=self.p["qos_reliability"], context=context,
-                                  logger=self.get_logger(),
-                                  split_duration_s=self.p["record_split_duration_s"],
-                                  split_size_bytes=self.p["record_split_size_bytes"])
-        except (OSError, BagError) as exc:
-            self.get_logger().error(f"not recording: {exc}; the simulation runs on")
-            self._record_error = f"not recording: {exc}"
-            return None
-        self.get_logger().info(f"recording to {self.p['record']}")
-        return rec
-
-    def _record_event(self, kind: str, values: dict[str, str] | None = None) -> None:
-        """Resets and parameter changes, so a re-simulation can do them at the same point."""
-        if self.recorder is not None:
-            now = time.time_ns()
-            self.recorder.record(self._events_topic, self._enc.event(json.dumps(
-                {"event": kind, "sim_time_s": self.sim_time_s, "values": values or {}})),
-                now, now)
-
-    def _record_command(self, sub, msg, six: tuple[float, ...]) -> None:
-        if self.recorder is not None:
-            stamp, now = msg.header.stamp, time.time_ns()
-            sent = stamp.sec * 1_000_000_000 + stamp.nanosec
-            self.recorder.record(sub.topic_name, self._enc.command(
-                msg.header.frame_id, stamp.sec, stamp.nanosec, six), now,
-                sent if sent >= 0 else now)         # a stamp before 1970 cannot be a time
+            self.recorder.record_outputs(data)
 
     # ---- commands ----------------------------------------------------------------------
-    def _refuse(self, what: str, value: object, expected: str) -> None:
-        self.get_logger().warning(f"refused {what} = {value!r}: expected {expected}; holding "
-                                  "the last valid command", throttle_duration_sec=1.0)
-
-    def _accepted(self, msg, value: float, what: str, limit: str, unit: str) -> bool:
-        """A command is used only if its frame is expected and its value finite and in range."""
-        refusal = session.command_refusal(msg.header.frame_id, value, self.p[limit], what, unit)
-        if refusal is not None:
-            self._refuse(*refusal)
-            return False
-        self._cmd_wall = time.monotonic()
-        return True
-
-    def _on_top_drive(self, msg: TwistStamped) -> None:
-        t = msg.twist
-        self._record_command(self.sub_top_drive, msg, (t.linear.x, t.linear.y, t.linear.z,
-                                                        t.angular.x, t.angular.y, t.angular.z))
-        value = msg.twist.angular.z
-        if self._accepted(msg, value, "top-drive speed twist.angular.z",
-                          "max_top_drive_speed_rad_s", "rad/s"):
-            self.rig.command(value, self.rig.commanded_hook_load_n)
-
-    def _on_hook_load(self, msg: WrenchStamped) -> None:
-        w = msg.wrench
-        self._record_command(self.sub_hook_load, msg, (w.force.x, w.force.y, w.force.z,
-                                                        w.torque.x, w.torque.y, w.torque.z))
-        value = msg.wrench.force.z
-        if self._accepted(msg, value, "hook load wrench.force.z", "max_hook_load_n", "N"):
-            self.rig.command(self.rig.commanded_speed_rad_s, value)
+    def _on_command(self, t: RigTopic, six_of: attrgetter, msg) -> None:
+        """Recorded as received; used only if the session's rule accepts it (frame expected,
+        value finite and in range), else the last valid command is held."""
+        six, header = six_of(msg), msg.header
+        if self.recorder is not None:
+            self.recorder.record_command(t, header.frame_id, header.stamp.sec,
+                                         header.stamp.nanosec, six)
+        refusal = session.apply_command(self.rig, self.p, t.command, header.frame_id, six)
+        if refusal is None:
+            self._cmd_wall = time.monotonic()
+        else:
+            what, value, expected = refusal
+            self.get_logger().warning(f"refused {what} = {value!r}: expected {expected}; holding "
+                                      "the last valid command", throttle_duration_sec=1.0)
 
     # ---- services ----------------------------------------------------------------------
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
@@ -258,10 +145,10 @@ class RigNode(Node):
         except (ParameterError, NoSteadyDrilling) as exc:
             response.success, response.message = False, str(exc)
             return response
-        self._record_event("reset")
+        if self.recorder is not None:
+            self.recorder.record_event("reset", self.sim_time_s)
         self._offset_s = offset
-        self._anchor()
-        self._diag_sim = self.rig.time_s
+        self.pacer.reset(self.rig.time_s)
         self.publish_sample(self.rig.sample())
         response.success = True
         response.message = f"reset to the initial state ({self.p['initial_state']})"
@@ -269,7 +156,7 @@ class RigNode(Node):
 
     def _on_pause(self, request: SetBool.Request, response: SetBool.Response):
         if self.paused and not request.data:
-            self._anchor()
+            self.pacer.anchor(self.rig.time_s)
         self.paused = bool(request.data)
         response.success = True
         response.message = "paused" if self.paused else "running"
@@ -279,7 +166,7 @@ class RigNode(Node):
         if not self.paused:
             response.success, response.message = False, "step works only while paused"
             return response
-        self.rig.advance_to(self.rig.time_s + 1.0 / self.p["rate_hz"] * self.p["real_time_factor"])
+        self.rig.advance_to(self.rig.time_s + self.pacer.tick_s)
         self.publish_sample(self.rig.sample())
         response.success = True
         response.message = f"stepped to t = {self.sim_time_s:.6f} s"
@@ -287,28 +174,19 @@ class RigNode(Node):
 
     # ---- parameters at run time --------------------------------------------------------
     def _on_set_parameters(self, params) -> SetParametersResult:
-        new = dict(self.p)
-        for param in params:
-            if param.name not in new:
-                continue
-            spec = self._specs[param.name]
-            value = param.value
-            if spec.choices and value not in spec.choices:
-                return SetParametersResult(successful=False, reason=f"{param.name} = {value!r}: "
-                                           f"expected one of {', '.join(spec.choices)}")
-            if isinstance(value, float) and not math.isfinite(value):
-                return SetParametersResult(successful=False,
-                                           reason=f"{param.name} = {value!r} is not finite")
-            new[param.name] = value
+        new, refusal = parameters.changed(self._specs, self.p, params)
+        if refusal is not None:
+            return SetParametersResult(successful=False, reason=refusal)
         try:
             changed = session.apply_changes(self.rig, self.p, new)
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         self.p = new
-        if changed:
-            self._record_event("parameters", {k: str(new[k]) for k in sorted(changed)})
-        if "real_time_factor" in changed:
-            self._anchor()
+        if changed and self.recorder is not None:
+            self.recorder.record_event("parameters", self.sim_time_s,
+                                       {k: str(new[k]) for k in sorted(changed)})
+        self.pacer.configure(new["rate_hz"], new["real_time_factor"], self._max_speed(new),
+                             self.rig.time_s)
         if "rate_hz" in changed and self.timer is not None:
             self.timer.cancel()
             self.destroy_timer(self.timer)
@@ -317,55 +195,23 @@ class RigNode(Node):
 
     # ---- diagnostics -------------------------------------------------------------------
     def publish_diagnostics(self) -> None:
+        """The status of ``core.diagnostics.rig_status`` as a DiagnosticArray."""
         now = time.monotonic()
-        wall = max(now - self._diag_wall, 1e-9)
-        rate = self._tick_count - self._diag_ticks
-        rtf = (self.rig.time_s - self._diag_sim) / wall
+        ticks = self.pacer.window(self.rig.time_s)
         metrics = self.rig.metrics()
         self.rig.reset_metrics_window()
-        self._diag_ticks, self._diag_wall, self._diag_sim = self._tick_count, now, self.rig.time_s
-        s = self.rig.sample()
-        age = now - self._cmd_wall
-        if s.off_bottom:
-            regime = "off bottom"
-        elif metrics["bounce_fraction"] > 0:
-            regime = "bouncing"
-        else:
-            regime = REGIME_NAMES[s.stick_slip]
-        status = DiagnosticStatus(name=f"{self.get_name()}: rig", hardware_id=self.preset.name)
-        status.level, status.message = DiagnosticStatus.OK, regime
-        record_error = self._record_error or (self.recorder.error if self.recorder else None)
-        if record_error:
-            status.level = DiagnosticStatus.ERROR
-            status.message = record_error
-        elif self.paused:
-            status.message = "paused"
-        elif age > self.p["command_timeout_s"]:
-            status.level = DiagnosticStatus.WARN
-            status.message = f"no command for {age:.1f} s (timeout {self.p['command_timeout_s']:g}"
-            status.message += " s); holding the last valid command"
-        elif self._overruns and not self.max_speed and rate < 0.9 * self.p["rate_hz"] * wall:
-            status.level = DiagnosticStatus.WARN
-            status.message = f"tick rate {rate / wall:.0f} Hz below {self.p['rate_hz']:g} Hz"
-        periods = self._periods[:self._n_periods]
-        p99 = float(np.percentile(periods, 99)) * 1e3 if periods.size else math.nan
-        self._n_periods = 0
-        values = {
-            "tick_rate_hz": f"{rate / wall:.1f}", "tick_period_p99_ms": f"{p99:.3f}",
-            "overruns": str(self._overruns),
-            "real_time_factor": f"{rtf:.3f}", "regime": regime, "ssi": f"{metrics['ssi']:.3f}",
-            "stick_fraction": f"{metrics['stick_fraction']:.3f}",
-            "command_age_s": f"{age:.3f}", "sim_time_s": f"{self.sim_time_s:.3f}",
-            "paused": str(self.paused).lower(),
-        }
-        status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
-        array = DiagnosticArray(status=[status])
+        status = rig_status(
+            self.rig.sample(), metrics, ticks, paused=self.paused,
+            record_error=self.recorder.error if self.recorder is not None else None,
+            command_age_s=now - self._cmd_wall, command_timeout_s=self.p["command_timeout_s"],
+            rate_hz=self.p["rate_hz"], max_speed=self.pacer.max_speed,
+            sim_time_s=self.sim_time_s)
+        array = DiagnosticArray(status=[DiagnosticStatus(
+            level=bytes([status.level]), name=f"{self.get_name()}: rig", message=status.message,
+            hardware_id=self.preset.name,
+            values=[KeyValue(key=k, value=v) for k, v in status.values.items()])])
         array.header.stamp = self.get_clock().now().to_msg()
-        self.pub_diag.publish(array)
-
-
-def _read_only(description: str) -> ParameterDescriptor:
-    return ParameterDescriptor(description=description, read_only=True)
+        self._diagnostics.publish(array)
 
 
 def main(args: list[str] | None = None) -> int:
@@ -380,7 +226,7 @@ def main(args: list[str] | None = None) -> int:
         node.rig.warm_up()   # load the compiled kernel before the first tick is due
         # EventsExecutor.spin() does not dispatch timers in this rclpy; spin_once() does, at
         # 1 kHz with p99 period ~1.08 ms and a fifth of the CPU of SingleThreadedExecutor.
-        if node.max_speed:
+        if node.pacer.max_speed:
             # ticks back to back; commands, services and diagnostics once per wall millisecond
             next_spin = 0.0
             while not stop:

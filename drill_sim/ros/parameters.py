@@ -7,8 +7,10 @@ import math
 from dataclasses import dataclass
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
+from rclpy.node import Node
+from rclpy.parameter import Parameter
 
-from ..core import Preset
+from ..core import ParameterError, Preset, load_preset
 from ..core.simulator import DEFAULT_DT
 
 
@@ -21,6 +23,14 @@ class Spec:
     high: float | None = None
     read_only: bool = False
     choices: tuple[str, ...] = ()
+
+    def refusal(self, value: object) -> str | None:
+        """Why ``value`` is refused beyond what the descriptor's range enforces, or None."""
+        if self.choices and value not in self.choices:
+            return f"{self.name} = {value!r}: expected one of {', '.join(self.choices)}"
+        if isinstance(value, float) and not math.isfinite(value):
+            return f"{self.name} = {value!r} is not finite"
+        return None
 
     def descriptor(self) -> ParameterDescriptor:
         d = ParameterDescriptor(name=self.name, description=self.description,
@@ -105,3 +115,32 @@ def specs(preset: Preset) -> list[Spec]:
     ]
     return out
 
+
+
+def declare(node: Node) -> tuple[Preset, dict[str, Spec], dict[str, object]]:
+    """Declare ``preset``, then every parameter of that preset's table, on ``node``: the preset,
+    the specs by name and the values. Raises ParameterError naming a value refused."""
+    node.declare_parameter("preset", "base", ParameterDescriptor(
+        description="preset name (base, shallow, deep) or preset YAML file", read_only=True))
+    preset = load_preset(node.get_parameter("preset").value)
+    by_name = {s.name: s for s in specs(preset)}
+    for spec in by_name.values():
+        node.declare_parameter(spec.name, spec.default, spec.descriptor())
+    values = {name: node.get_parameter(name).value for name in by_name}
+    for name, spec in by_name.items():
+        if (refusal := spec.refusal(values[name])) is not None:
+            raise ParameterError(f"parameter {refusal}")
+    return preset, by_name, values
+
+
+def changed(by_name: dict[str, Spec], values: dict[str, object], params: list[Parameter]
+            ) -> tuple[dict[str, object], str | None]:
+    """The values after a run-time change to ``params``, or the first refusal (a reason)."""
+    new = dict(values)
+    for param in params:
+        if param.name in new:
+            refusal = by_name[param.name].refusal(param.value)
+            if refusal is not None:
+                return values, refusal
+            new[param.name] = param.value
+    return new, None

@@ -1,6 +1,9 @@
 """In-node recording: every topic the node publishes and every command it receives, into a
-rosbag2 MCAP bag (``drill_sim.bag.writer``), with the session's context as MCAP metadata.
-Outputs are recorded as the very bytes the node published.
+rosbag2 MCAP bag (``drill_sim.bag.writer``), with the session's context (parameters,
+dimensionless groups, scales, preset, node) as MCAP metadata, which ``drill_sim bag resim``
+needs to re-run the session. Which topics, of which types, come from the topics table.
+Outputs are recorded as the very bytes the node published; commands and events are encoded
+here (``drill_sim.wire.cdr``).
 
 Recording problems (full disk, unwritable path) stop the recording with a clear error and leave
 the simulation running; the bag written so far stays readable.
@@ -11,45 +14,88 @@ from __future__ import annotations
 import json
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from .. import __version__
-from ..bag.writer import BagError, BagWriter, qos_profile
+from ..bag.writer import BagError, BagWriter
+from ..core.rig import Rig
+from ..wire import WireError, cdr, rig_topics
+from ..wire.rig_topics import RigTopic
 
 
 class SessionRecorder:
-    def __init__(self, path: str, topics: dict[str, tuple[str, str]], *, reliability: str,
-                 context: dict[str, dict[str, str]], logger, split_duration_s: float = 0.0,
-                 split_size_bytes: int = 0) -> None:
-        """topics: full topic name -> (type name pkg/msg/Type, reliability)."""
+    """Records one rig session into the new bag directory named by the ``record`` parameter.
+    Never raises: ``error`` says why it does not record (any more), for the node's diagnostics.
+    """
+
+    def __init__(self, *, p: dict[str, object], rig: Rig, preset: str, node: str,
+                 resolve: Callable[[str], str], stamp_epoch_ns: int, logger) -> None:
+        """p: the node's parameters at start; node: its fully qualified name; resolve: a
+        table name to the full topic name (the node's remappings applied); stamp_epoch_ns:
+        what output stamps count from [ns] (0 with /clock)."""
         self.logger = logger
         self.error: str | None = None
+        with_clock = bool(p["publish_clock"])
+        self.names = {t.name: resolve(t.name) for t in rig_topics.recorded(with_clock)}
+        self.outputs = [self.names[t.name] for t in rig_topics.published(with_clock)]
+        self.events_topic = self.names[rig_topics.EVENTS_TOPIC.name]
         meta = {"session": {"package": "drill_sim", "version": __version__,
                             "start_time_ns": str(time.time_ns()),
                             "command_line": json.dumps(sys.argv)}}
-        for name, values in context.items():
+        for name, values in _context(p, rig, preset, node, stamp_epoch_ns,
+                                     self.events_topic).items():
             meta.setdefault(name, {}).update(values)
-        self.writer = BagWriter(Path(path), metadata=meta, split_duration_s=split_duration_s,
-                                split_size_bytes=split_size_bytes)
-        for name, (type_name, rel) in topics.items():
-            self.writer.add_topic(name, type_name, [qos_profile(rel or reliability)])
+        # Every topic is recorded as offered with the session's qos_reliability (so /clock
+        # too, though its publisher is always reliable): bags keep the form they always had.
+        offered = rig_topics.RIG_QOS.with_reliability(str(p["qos_reliability"]))
+        self._encode_command = cdr.StampedVectorsByFrame()
+        try:
+            self.writer = BagWriter(Path(str(p["record"])), metadata=meta,
+                                    split_duration_s=p["record_split_duration_s"],
+                                    split_size_bytes=p["record_split_size_bytes"])
+            for t in rig_topics.recorded(with_clock):
+                self.writer.add_topic(self.names[t.name], t.type_name, [offered.as_dict()])
+        except (OSError, BagError) as exc:
+            self.error = f"not recording: {exc}"
+            logger.error(f"{self.error}; the simulation runs on")
+            return
+        logger.info(f"recording to {p['record']}")
 
-    def record(self, topic: str, data: bytes, log_time_ns: int, publish_time_ns: int) -> None:
-        """One CDR-serialized message."""
+    def record_outputs(self, data: list[bytes]) -> None:
+        """One tick's outputs as published, in the table's publishing order, received and
+        published now."""
         if self.error is None:
+            write, now = self.writer.write, time.time_ns()
             try:
-                self.writer.write(topic, data, log_time_ns, publish_time_ns)
+                for topic, raw in zip(self.outputs, data, strict=True):
+                    write(topic, raw, now, now)
             except (OSError, BagError) as exc:
                 self._stop(exc)
 
-    def record_many(self, topics: list[str], data: list[bytes], time_ns: int) -> None:
-        """One tick's outputs, all received and published at ``time_ns``."""
+    def record_command(self, t: RigTopic, frame_id: str, sec: int, nanosec: int,
+                       six: tuple[float, ...]) -> None:
+        """A command as received (TwistStamped or WrenchStamped, its six float64), logged now
+        and published at its stamp (now if stamped before 1970: that cannot be a time)."""
         if self.error is None:
-            write = self.writer.write
+            now, sent = time.time_ns(), sec * 1_000_000_000 + nanosec
             try:
-                for topic, raw in zip(topics, data, strict=True):
-                    write(topic, raw, time_ns, time_ns)
-            except (OSError, BagError) as exc:
+                self.writer.write(self.names[t.name],
+                                  self._encode_command(frame_id, sec, nanosec, six), now,
+                                  sent if sent >= 0 else now)
+            except (OSError, BagError, WireError) as exc:
+                self._stop(exc)
+
+    def record_event(self, kind: str, sim_time_s: float,
+                     values: dict[str, str] | None = None) -> None:
+        """A reset or parameter change at session time ``sim_time_s`` [s], so a re-simulation
+        can do it at the same point."""
+        if self.error is None:
+            now = time.time_ns()
+            text = json.dumps({"event": kind, "sim_time_s": sim_time_s, "values": values or {}})
+            try:
+                self.writer.write(self.events_topic, cdr.string(text), now, now)
+            except (OSError, BagError, WireError) as exc:
                 self._stop(exc)
 
     def _stop(self, exc: Exception) -> None:
@@ -66,3 +112,19 @@ class SessionRecorder:
                 self.writer.close()
             except (OSError, BagError) as exc:
                 self.logger.error(f"closing the bag failed: {exc}")
+
+
+def _context(p: dict[str, object], rig: Rig, preset: str, node: str, stamp_epoch_ns: int,
+             events_topic: str) -> dict[str, dict[str, str]]:
+    """The session's MCAP metadata records (name -> {key: text}); msg_docs/bag.md."""
+    g, sc = rig.groups, rig.scales
+    return {
+        "parameters": {k: str(v) for k, v in sorted(p.items())},
+        "groups": {"n": str(g.n), "psi": repr(g.psi), "lambda": repr(g.lam),
+                   "beta": repr(g.beta)},
+        "scales": {"time_s": repr(sc.time_s), "length_m": repr(sc.length_m),
+                   "force_n": repr(sc.force_n),
+                   "stiffness_nm_per_rad": repr(sc.stiffness_nm_per_rad)},
+        "session": {"preset": preset, "node": node, "stamp_epoch_ns": str(stamp_epoch_ns),
+                    "events_topic": events_topic},
+    }

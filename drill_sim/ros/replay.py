@@ -16,12 +16,11 @@ from dataclasses import dataclass
 import yaml
 from rclpy.duration import Duration
 from rclpy.node import Node
-from rclpy.qos import QoSProfile
 from rosgraph_msgs.msg import Clock
 
-from ..bag import cdr
 from ..bag.bag import Bag
-from .topics import UnknownType, message_class, profile_from_dicts
+from ..wire import cdr, rig_topics
+from .topics import UnknownType, message_class, profile_from_dicts, rclpy_qos
 
 
 @dataclass(frozen=True)
@@ -57,7 +56,8 @@ class Player(Node):
             qos = profile_from_dicts(profiles if isinstance(profiles, list) else None,
                                      options.queue_depth)
             self.publishers_by_topic[name] = self.create_publisher(cls, name, qos)
-        self.clock_pub = self.create_publisher(Clock, "/clock", QoSProfile(depth=10)) \
+        clock = rig_topics.CLOCK_TOPIC
+        self.clock_pub = self.create_publisher(Clock, clock.name, rclpy_qos(clock.qos)) \
             if options.clock_hz else None
         self.encode_clock = cdr.clock()
         self.sent = 0

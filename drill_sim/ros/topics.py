@@ -1,5 +1,6 @@
-"""What the recorder and the player share: message classes from type names, and QoS profiles
-to and from rosbag2's ``offered_qos_profiles`` (strings in Jazzy, integers in older bags)."""
+"""rclpy's side of the wire definitions: message and service classes from type names, and
+rclpy QoS profiles to and from ``wire.qos`` (the one statement of the rig's QoS and of
+rosbag2's ``offered_qos_profiles``, strings in Jazzy, integers in older bags)."""
 
 from __future__ import annotations
 
@@ -13,13 +14,11 @@ from rclpy.qos import (
 )
 from rclpy.topic_endpoint_info import TopicEndpointInfo
 
-from ..bag.writer import qos_profile
+from ..wire.qos import BEST_EFFORT, RELIABLE, TRANSIENT_LOCAL, VOLATILE, Qos, player_qos
 
-_RELIABILITY = {"reliable": ReliabilityPolicy.RELIABLE, 1: ReliabilityPolicy.RELIABLE,
-                "best_effort": ReliabilityPolicy.BEST_EFFORT, 2: ReliabilityPolicy.BEST_EFFORT}
-_DURABILITY = {"transient_local": DurabilityPolicy.TRANSIENT_LOCAL,
-               1: DurabilityPolicy.TRANSIENT_LOCAL,
-               "volatile": DurabilityPolicy.VOLATILE, 2: DurabilityPolicy.VOLATILE}
+_RELIABILITY = {RELIABLE: ReliabilityPolicy.RELIABLE, BEST_EFFORT: ReliabilityPolicy.BEST_EFFORT}
+_DURABILITY = {VOLATILE: DurabilityPolicy.VOLATILE,
+               TRANSIENT_LOCAL: DurabilityPolicy.TRANSIENT_LOCAL}
 
 
 class UnknownType(LookupError):
@@ -28,39 +27,48 @@ class UnknownType(LookupError):
 
 def message_class(type_name: str) -> type:
     """The Python class of ``pkg/msg/Type``, imported from the installed interfaces."""
+    return _interface_class(type_name, "msg")
+
+
+def service_class(type_name: str) -> type:
+    """The Python class of ``pkg/srv/Type``, imported from the installed interfaces."""
+    return _interface_class(type_name, "srv")
+
+
+def _interface_class(type_name: str, kind: str) -> type:
     parts = type_name.split("/")
-    if len(parts) != 3 or parts[1] != "msg" or not all(parts):
-        raise UnknownType(f"'{type_name}' is not a message type name (pkg/msg/Type)")
+    if len(parts) != 3 or parts[1] != kind or not all(parts):
+        raise UnknownType(f"'{type_name}' is not a {kind} type name (pkg/{kind}/Type)")
     try:
-        return getattr(importlib.import_module(f"{parts[0]}.msg"), parts[2])
+        return getattr(importlib.import_module(f"{parts[0]}.{kind}"), parts[2])
     except (ImportError, AttributeError):
-        raise UnknownType(f"message type '{type_name}' is not installed here") from None
+        raise UnknownType(f"{kind} type '{type_name}' is not installed here") from None
+
+
+def rclpy_qos(qos: Qos) -> QoSProfile:
+    """The rclpy profile of a wire ``Qos``: the one conversion for node, driver, monitor and
+    player."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=qos.depth,
+                      reliability=_RELIABILITY[qos.reliability],
+                      durability=_DURABILITY[qos.durability])
+
+
+def wire_qos(qos: QoSProfile) -> Qos:
+    """An rclpy profile (a discovered publisher's, say) as a wire ``Qos``."""
+    return Qos(BEST_EFFORT if qos.reliability == ReliabilityPolicy.BEST_EFFORT else RELIABLE,
+               TRANSIENT_LOCAL if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
+               else VOLATILE, int(qos.depth))
 
 
 def profile_dict(qos: QoSProfile) -> dict:
     """One rclpy profile as a rosbag2 metadata (version 9) QoS entry."""
-    return qos_profile(
-        reliability="best_effort" if qos.reliability == ReliabilityPolicy.BEST_EFFORT
-        else "reliable",
-        depth=int(qos.depth),
-        durability="transient_local" if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
-        else "volatile")
+    return wire_qos(qos).as_dict()
 
 
 def profile_from_dicts(profiles: list[dict] | None, depth: int) -> QoSProfile:
-    """The profile to publish recorded messages with, as rosbag2's player chooses it: reliable
-    and transient-local only if every recorded publisher offered them; keep-last ``depth``."""
-    profiles = [p for p in profiles or [] if isinstance(p, dict)]
-    reliable = all(_RELIABILITY.get(p.get("reliability"), ReliabilityPolicy.RELIABLE)
-                   == ReliabilityPolicy.RELIABLE for p in profiles)
-    latched = bool(profiles) and all(
-        _DURABILITY.get(p.get("durability")) == DurabilityPolicy.TRANSIENT_LOCAL
-        for p in profiles)
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
-                      reliability=ReliabilityPolicy.RELIABLE if reliable
-                      else ReliabilityPolicy.BEST_EFFORT,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL if latched
-                      else DurabilityPolicy.VOLATILE)
+    """The profile to publish recorded messages with, as rosbag2's player chooses it
+    (``wire.qos.player_qos``)."""
+    return rclpy_qos(player_qos(profiles, depth))
 
 
 def subscription_qos(publishers: list[TopicEndpointInfo], depth: int) -> QoSProfile:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 
 from ...bag.errors import BagError
+from ...wire import WireError
 from ..errors import UsageError
 from . import export, info, metrics, plot, repair, resim
 
@@ -30,5 +31,5 @@ def run(args: argparse.Namespace) -> int:
     """Run the chosen tool; a bag it cannot read is a usage error (one line, status 2)."""
     try:
         return args.bag_run(args)
-    except BagError as exc:
+    except (BagError, WireError) as exc:
         raise UsageError(str(exc)) from None

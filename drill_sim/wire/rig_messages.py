@@ -1,0 +1,31 @@
+"""The rig node's output messages as CDR bytes, without ROS: one encoder per published topic,
+compiled from the topics table (``rig_topics``), and one call for a whole sample. The node
+publishes and records these bytes; tools and benchmarks that make rig bags offline use the same.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from . import cdr, rig_topics
+
+if TYPE_CHECKING:
+    from ..core.rig import RigSample
+
+
+class RigEncoders:
+    """CDR encoders of the messages the node publishes every tick, compiled once from the
+    table (frames and joint names fixed); ``topics`` in the order ``sample`` returns them."""
+
+    def __init__(self, with_clock: bool) -> None:
+        self.with_clock = with_clock
+        self.topics = rig_topics.published(with_clock)
+        self._encoders = [
+            cdr.fields_encoder(cdr.layout(t.type_name, frame_id=t.frame_id, names=t.joints),
+                               [(f.message, f.sample) for f in t.fields])
+            for t in self.topics]
+
+    def sample(self, stamp_ns: int, s: RigSample) -> list[bytes]:
+        """One tick's messages stamped ``stamp_ns`` [ns], in the order of ``topics``."""
+        sec, nsec = divmod(stamp_ns, 1_000_000_000)
+        return [encode(sec, nsec, s) for encode in self._encoders]

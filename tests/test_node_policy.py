@@ -1,0 +1,159 @@
+"""The node's rules without ROS: the diagnostics policy, the pacing of ticks (on a fake clock)
+and the command rule the node and ``bag resim`` share."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from drill_sim.core import RPM, Rig, load_preset, session
+from drill_sim.core.diagnostics import ERROR, OK, WARN, regime, rig_status
+from drill_sim.core.pacing import Pacer, TickStats
+
+
+class FakeClock:
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+@pytest.fixture(scope="module")
+def samples():
+    """The base rig drilling steadily, stuck in stick-slip, and off bottom."""
+    preset = load_preset("base")
+    rig = Rig(preset.rig)
+    weight = preset.rig.submerged_weight_n
+    rig.start_steady(200 * RPM, weight - 80e3)
+    steady = rig.sample()
+    rig.start_steady(60 * RPM, weight - 100e3, perturbation=1e-3)
+    rig.advance(30.0)
+    while not rig.sample().stuck:
+        rig.advance(1e-3)
+    stuck = rig.sample()
+    rig.command(60 * RPM, 1.2 * weight)
+    rig.advance(2.0)
+    return {"steady": steady, "stuck": stuck, "off": rig.sample()}
+
+
+QUIET = {"ssi": 0.0, "stick_fraction": 0.0, "bounce_fraction": 0.0}
+GOOD_TICKS = TickStats(ticks=1000, wall_s=1.0, sim_s=1.0, period_p99_s=1.05e-3, overruns=0)
+RUNNING = {"paused": False, "record_error": None, "command_age_s": 0.2,
+           "command_timeout_s": 1.0, "rate_hz": 1000.0, "max_speed": False, "sim_time_s": 12.5}
+
+
+def test_regime_in_words(samples):
+    assert regime(samples["steady"], 0.0) == "drilling"
+    assert regime(samples["stuck"], 0.0) == "stick-slip"
+    assert regime(samples["stuck"], 0.01) == "bouncing"
+    assert regime(samples["off"], 0.01) == "off bottom"
+
+
+def test_a_healthy_rig_is_ok_with_every_value(samples):
+    status = rig_status(samples["steady"], QUIET, GOOD_TICKS, **RUNNING)
+    assert (status.level, status.message) == (OK, "drilling")
+    assert status.values == {
+        "tick_rate_hz": "1000.0", "tick_period_p99_ms": "1.050", "overruns": "0",
+        "real_time_factor": "1.000", "regime": "drilling", "ssi": "0.000",
+        "stick_fraction": "0.000", "command_age_s": "0.200", "sim_time_s": "12.500",
+        "paused": "false"}
+
+
+def test_problems_in_order_of_precedence(samples):
+    s = samples["stuck"]
+    slow = TickStats(ticks=800, wall_s=1.0, sim_s=0.8, period_p99_s=2e-3, overruns=3)
+    stale = dict(RUNNING, command_age_s=5.0)
+    status = rig_status(s, QUIET, slow, **dict(stale, record_error="recording stopped: full"))
+    assert (status.level, status.message) == (ERROR, "recording stopped: full")
+    status = rig_status(s, QUIET, slow, **dict(stale, paused=True))
+    assert (status.level, status.message, status.values["paused"]) == (OK, "paused", "true")
+    status = rig_status(s, QUIET, slow, **stale)
+    assert status.level == WARN and status.message.startswith("no command for 5.0 s")
+    status = rig_status(s, QUIET, slow, **RUNNING)
+    assert (status.level, status.message) == (WARN, "tick rate 800 Hz below 1000 Hz")
+    assert status.values["regime"] == "stick-slip"
+
+
+def test_slow_ticks_warn_only_after_overruns_and_never_at_max_speed(samples):
+    s = samples["steady"]
+    few = TickStats(ticks=800, wall_s=1.0, sim_s=0.8, period_p99_s=math.nan, overruns=0)
+    assert rig_status(s, QUIET, few, **RUNNING).level == OK
+    late = TickStats(ticks=800, wall_s=1.0, sim_s=0.8, period_p99_s=math.nan, overruns=1)
+    assert rig_status(s, QUIET, late, **dict(RUNNING, max_speed=True)).level == OK
+    assert rig_status(s, QUIET, late, **RUNNING).values["tick_period_p99_ms"] == "nan"
+
+
+def test_real_time_pacing_follows_the_clock_and_drops_a_backlog():
+    clock = FakeClock()
+    pacer = Pacer(1000.0, 2.0, False, window_s=1.0, rig_time_s=0.0, clock=clock)
+    clock.now += 0.010
+    assert pacer.target(0.0) == pytest.approx(0.020)          # twice real time
+    pacer.advanced(0.020)
+    clock.now += 1.0                                          # a long stall: 2 s behind
+    target = pacer.target(0.020)
+    assert target == pytest.approx(0.020 + 0.2 + 0.001)       # at most 0.1 s x factor per tick
+    pacer.advanced(target)                                    # still behind: re-anchored here
+    clock.now += 0.001
+    assert pacer.target(target) == pytest.approx(target + 0.002)
+    assert pacer.tick_s == pytest.approx(0.002)
+
+
+def test_max_speed_pacing_advances_one_tick_per_call():
+    pacer = Pacer(100.0, 1.0, True, window_s=1.0, rig_time_s=5.0, clock=FakeClock())
+    assert pacer.target(5.0) == pytest.approx(5.01)
+
+
+def test_tick_statistics_over_a_window():
+    clock = FakeClock()
+    pacer = Pacer(1000.0, 1.0, False, window_s=1.0, rig_time_s=0.0, clock=clock)
+    for k in range(100):
+        clock.now += 0.002 if k == 50 else 0.001             # one overrun (> 1.5 periods)
+        pacer.tick_started()
+        pacer.advanced(0.001 * k)
+    stats = pacer.window(0.1)
+    assert (stats.ticks, stats.overruns) == (100, 1)
+    assert stats.wall_s == pytest.approx(0.101)
+    assert stats.rate_hz == pytest.approx(100 / 0.101)
+    assert stats.real_time_factor == pytest.approx(0.1 / 0.101)
+    assert 1e-3 <= stats.period_p99_s <= 2e-3
+    clock.now += 0.5
+    pacer.reset(0.0)                                          # the rig restarted at 0 s
+    stats = pacer.window(0.25)
+    assert stats.ticks == 0 and math.isnan(stats.period_p99_s) and stats.overruns == 1
+    assert stats.sim_s == pytest.approx(0.25)
+
+
+def test_max_speed_ticks_never_overrun():
+    clock = FakeClock()
+    pacer = Pacer(1000.0, 1.0, True, window_s=1.0, rig_time_s=0.0, clock=clock)
+    for _ in range(3):
+        clock.now += 0.05
+        pacer.tick_started()
+    assert pacer.overruns == 0
+    pacer.configure(1000.0, 1.0, False, 0.0)
+    clock.now += 0.05
+    pacer.tick_started()
+    assert pacer.overruns == 1
+
+
+def test_command_rule_takes_its_field_and_limit():
+    preset = load_preset("base")
+    p = {"max_top_drive_speed_rad_s": 30.0, "max_hook_load_n": 1e6}
+    rig = Rig(preset.rig)
+    rig.start_at_rest(0.0)
+    six = (0.0, 0.0, 2e5, 0.0, 0.0, 7.0)
+    assert session.apply_command(rig, p, "top_drive", "top_drive", six) is None
+    assert (rig.commanded_speed_rad_s, rig.commanded_hook_load_n) == (7.0, preset.rig
+                                                                      .submerged_weight_n)
+    assert session.apply_command(rig, p, "hook_load", "", six) is None
+    assert (rig.commanded_speed_rad_s, rig.commanded_hook_load_n) == (7.0, 2e5)
+    refused = session.apply_command(rig, p, "top_drive", "bit", six)
+    assert refused == ("top-drive speed twist.angular.z frame_id", "bit", "'top_drive' or empty")
+    too_fast = (0.0, 0.0, 0.0, 0.0, 0.0, 31.0)
+    what, value, expected = session.apply_command(rig, p, "top_drive", "", too_fast)
+    assert (what, value) == ("top-drive speed twist.angular.z [rad/s]", 31.0)
+    assert "[0, 30] rad/s" in expected
+    assert session.apply_command(rig, p, "hook_load", "", (0.0, 0.0, math.nan) + (0.0,) * 3)
+    assert (rig.commanded_speed_rad_s, rig.commanded_hook_load_n) == (7.0, 2e5)  # held
