@@ -13,9 +13,10 @@ from bagutil import rig_bag
 from drill_sim.bag.bag import Bag
 from drill_sim.bag.series import rig_series
 from drill_sim.cli.main import main
+from drill_sim.wire.rig_topics import OUTPUTS
 
 TICKS = 400
-TOPICS = 7                                           # the node's outputs in rig_bag
+TOPICS = len(OUTPUTS)   # the rig's outputs, one message each per tick
 
 
 @pytest.fixture
