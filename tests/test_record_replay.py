@@ -145,8 +145,8 @@ def test_replay_plays_a_bag_written_by_another_tool_onto_a_remapped_topic(ros, t
 
 @pytest.mark.parametrize("args, expected", [
     (["{tmp}/nowhere"], "no such file or directory"),
-    (["{tmp}/bag", "--rate", "0"], "--rate = 0.0: expected a number > 0"),
-    (["{tmp}/bag", "--rate", "nan"], "--rate = nan"),
+    (["{tmp}/bag", "--rate", "0"], "-r/--rate 0: out of range; expected a playback speed"),
+    (["{tmp}/bag", "--rate", "nan"], "-r/--rate nan: not a finite number"),
     (["{tmp}/bag", "--topics", "/absent"], "not in"),
     (["{tmp}/bag", "--start-offset", "5"], "past the bag's end"),
     (["{tmp}/junk.mcap"], "not an MCAP file"),
@@ -194,7 +194,7 @@ def test_record_captures_selected_topics_raw_with_their_qos(ros, tmp_path):
 
 def test_record_refuses_an_existing_bag_and_bad_arguments(tmp_path):
     (tmp_path / "taken").mkdir()
-    for args, expected in ((["/x", "-o", str(tmp_path / "taken")], "already exists"),
+    for args, expected in ((["/x", "-o", str(tmp_path / "taken")], "it exists already"),
                            ([], "name topics, or give --regex or --all"),
                            (["--regex", "("], "bad regular expression")):
         run = subprocess.run([installed("drill_sim_record"), *args], capture_output=True,

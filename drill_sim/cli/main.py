@@ -12,7 +12,8 @@ from collections.abc import Sequence
 
 from ..core import ParameterError
 from . import bag, run, simulate, stability
-from .errors import UsageError
+from .checks import join_negative_values
+from .errors import Parser, UsageError
 
 # name -> (module, help); the order is the order ``--help`` lists them in
 COMMANDS = {
@@ -23,14 +24,9 @@ COMMANDS = {
 }
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one clear line, never a usage dump
-        raise UsageError(message)
-
-
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="drill_sim", description=__doc__.split("\n")[0])
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    parser = Parser(prog="drill_sim", description=__doc__.split("\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     for name, (module, text) in COMMANDS.items():
         module.add_arguments(sub.add_parser(name, help=text))
     return parser
@@ -39,7 +35,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
         return COMMANDS[args.command][0].run(args)
     except (UsageError, ParameterError) as exc:
         print(f"drill_sim: error: {exc}", file=sys.stderr)

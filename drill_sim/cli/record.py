@@ -22,9 +22,17 @@ from .. import __version__
 from ..bag.writer import BagError, BagWriter
 from ..ros.record import TopicSelection, record
 from ..ros.stopping import init_stoppable
-from .errors import UsageError
+from .checks import in_range, integer, join_negative_values, new_bag, number, whole
+from .errors import Parser, UsageError
 
 DESCRIPTION = "Record topics into a rosbag2 MCAP bag (what `ros2 bag record` does)."
+
+
+# The documented limits (msg_docs/cli.md, "Limits").
+MAX_SECONDS = 1e7              # --duration and --max-bag-duration [s], about 116 days
+MAX_BAG_SIZE = 1 << 40         # --max-bag-size [bytes], 1 TiB
+MAX_QUEUE_DEPTH = 100_000      # messages per topic
+DISCOVERY_RANGE = (0.01, 60.0)  # [s]
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -32,35 +40,45 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-a", "--all", action="store_true", help="record every topic")
     parser.add_argument("-e", "--regex", help="record topics matching this regular expression")
     parser.add_argument("-x", "--exclude", help="skip topics matching this regular expression")
-    parser.add_argument("-o", "--output", help="bag directory to create "
-                        "(default: drill_sim_record_<date>-<time>)")
-    parser.add_argument("-d", "--max-bag-duration", type=float, default=0.0, metavar="S",
-                        help="start a new file every S seconds (0 = never)")
-    parser.add_argument("-b", "--max-bag-size", type=int, default=0, metavar="BYTES",
-                        help="start a new file past this size (0 = never)")
-    parser.add_argument("--duration", type=float, default=0.0, metavar="S",
-                        help="stop after S seconds of wall time (0 = until Ctrl-C)")
-    parser.add_argument("--queue-depth", type=int, default=1000,
-                        help="subscription history depth per topic [messages] (default 1000)")
-    parser.add_argument("--discovery-period", type=float, default=0.1, metavar="S",
-                        help="how often to look for new topics [s] (default 0.1)")
+    parser.add_argument("-o", "--output", type=Path,
+                        help="bag directory to create, in an existing folder "
+                             "(default: drill_sim_record_<date>-<time>)")
+    parser.add_argument("-d", "--max-bag-duration", type=number, default=0.0, metavar="S",
+                        help=f"start a new file every S seconds (0 = never), up to "
+                             f"{MAX_SECONDS:g}")
+    parser.add_argument("-b", "--max-bag-size", type=integer, default=0, metavar="BYTES",
+                        help=f"start a new file past this size (0 = never), up to {MAX_BAG_SIZE}")
+    parser.add_argument("--duration", type=number, default=0.0, metavar="S",
+                        help=f"stop after S seconds of wall time (0 = until Ctrl-C), up to "
+                             f"{MAX_SECONDS:g}")
+    parser.add_argument("--queue-depth", type=integer, default=1000,
+                        help="subscription history depth per topic [messages], 1 to "
+                             f"{MAX_QUEUE_DEPTH} (default 1000)")
+    parser.add_argument("--discovery-period", type=number, default=0.1, metavar="S",
+                        help="how often to look for new topics [s], "
+                             f"{DISCOVERY_RANGE[0]:g} to {DISCOVERY_RANGE[1]:g} (default 0.1)")
 
 
 def _check(args: argparse.Namespace) -> None:
     """What argparse cannot check alone, as UsageError."""
     if not (args.topics or args.all or args.regex):
         raise UsageError("name topics, or give --regex or --all")
-    for name, value in (("--max-bag-duration", args.max_bag_duration),
-                        ("--max-bag-size", args.max_bag_size), ("--duration", args.duration)):
-        if not value >= 0:
-            raise UsageError(f"{name} = {value}: expected a number >= 0")
-    if not (args.queue_depth >= 1 and args.discovery_period > 0):
-        raise UsageError("--queue-depth must be >= 1 and --discovery-period > 0")
+    in_range("-d/--max-bag-duration", args.max_bag_duration, 0.0, MAX_SECONDS, unit="s",
+             what="a file length")
+    whole("-b/--max-bag-size", args.max_bag_size, 0, MAX_BAG_SIZE, unit="bytes",
+          what="a file size:")
+    in_range("--duration", args.duration, 0.0, MAX_SECONDS, unit="s", what="a recording time")
+    whole("--queue-depth", args.queue_depth, 1, MAX_QUEUE_DEPTH, unit="messages",
+          what="a history depth:")
+    in_range("--discovery-period", args.discovery_period, *DISCOVERY_RANGE, unit="s",
+             what="a period")
     if args.regex or args.exclude:
         try:
             re.compile(args.regex or ""), re.compile(args.exclude or "")
         except re.error as exc:
             raise UsageError(f"bad regular expression: {exc}") from None
+    if args.output is not None:
+        new_bag("-o/--output", args.output)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -68,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     (``main`` sets it; default ``sys.argv``), goes to rclpy and into the bag's metadata."""
     _check(args)
     argv = getattr(args, "argv", None) or sys.argv
-    output = Path(args.output or datetime.now().strftime("drill_sim_record_%Y_%m_%d-%H_%M_%S"))
+    output = args.output or Path(datetime.now().strftime("drill_sim_record_%Y_%m_%d-%H_%M_%S"))
     session = {"package": "drill_sim", "version": __version__,
                "start_time_ns": str(time.time_ns()), "command_line": json.dumps(argv)}
     try:
@@ -93,14 +111,14 @@ def run(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     """The ``drill_sim_record`` console script: ROS arguments are left to rclpy."""
     argv = sys.argv if argv is None else argv
-    parser = argparse.ArgumentParser(prog="drill_sim_record", description=DESCRIPTION)
+    parser = Parser(prog="drill_sim_record", description=DESCRIPTION)
     add_arguments(parser)
     parser.set_defaults(argv=argv)
-    args = parser.parse_args(remove_ros_args(argv)[1:])
     try:
-        return run(args)
+        return run(parser.parse_args(join_negative_values(remove_ros_args(argv)[1:])))
     except UsageError as exc:
-        parser.error(str(exc))      # usage and the message on stderr, status 2, as argparse does
+        print(f"drill_sim_record: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

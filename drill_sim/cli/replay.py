@@ -10,7 +10,6 @@ is ``drill_sim.ros.replay``; this module is its command line.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 
@@ -22,43 +21,58 @@ from ..bag.errors import BagError
 from ..ros.replay import Player, PlayOptions
 from ..ros.stopping import init_stoppable
 from ..terminal import StatusLine
-from .errors import UsageError
+from .checks import in_range, integer, join_negative_values, number, whole
+from .errors import Parser, UsageError
 
 DESCRIPTION = "Publish a bag's messages with their recorded timing (what `ros2 bag play` does)."
 
 
+# The documented limits (msg_docs/cli.md, "Limits").
+RATE_RANGE = (0.001, 1000.0)   # playback speed relative to the recording
+MAX_OFFSET_S = 1e7             # --start-offset [s]
+MAX_CLOCK_HZ = 10_000.0
+MAX_QUEUE_DEPTH = 100_000      # messages per topic
+MAX_WAIT_FOR = 1000            # subscriptions
+MAX_WAIT_S = 86_400.0          # --wait-timeout [s], a day
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("bag", help="bag directory (rosbag2, MCAP storage) or .mcap file")
-    parser.add_argument("-r", "--rate", type=float, default=1.0,
-                        help="playback speed relative to the recording (default 1)")
+    parser.add_argument("-r", "--rate", type=number, default=1.0,
+                        help="playback speed relative to the recording, "
+                             f"{RATE_RANGE[0]:g} to {RATE_RANGE[1]:g} (default 1)")
     parser.add_argument("-l", "--loop", action="store_true", help="play again and again")
-    parser.add_argument("--start-offset", type=float, default=0.0, metavar="S",
+    parser.add_argument("--start-offset", type=number, default=0.0, metavar="S",
                         help="start S seconds into the bag")
     parser.add_argument("--topics", nargs="+", metavar="TOPIC", help="replay only these topics")
-    parser.add_argument("--clock", type=float, nargs="?", const=100.0, default=0.0,
-                        metavar="HZ", help="publish /clock from the recorded times at HZ "
-                        "(default 100 when given)")
-    parser.add_argument("--queue-depth", type=int, default=1000,
-                        help="publisher history depth per topic [messages] (default 1000)")
-    parser.add_argument("--wait-for", type=int, default=1, metavar="N",
+    parser.add_argument("--clock", type=number, nargs="?", const=100.0, default=0.0,
+                        metavar="HZ", help="publish /clock from the recorded times at HZ, up to "
+                        f"{MAX_CLOCK_HZ:g} (default 100 when given)")
+    parser.add_argument("--queue-depth", type=integer, default=1000,
+                        help="publisher history depth per topic [messages], 1 to "
+                             f"{MAX_QUEUE_DEPTH} (default 1000)")
+    parser.add_argument("--wait-for", type=integer, default=1, metavar="N",
                         help="wait for at least N matched subscriptions before playing "
-                             "(default 1; 0 = do not wait)")
-    parser.add_argument("--wait-timeout", type=float, default=30.0, metavar="S",
-                        help="play anyway after S seconds of waiting (default 30)")
+                             f"(default 1; 0 = do not wait), up to {MAX_WAIT_FOR}")
+    parser.add_argument("--wait-timeout", type=number, default=30.0, metavar="S",
+                        help="play anyway after S seconds of waiting (default 30), up to "
+                             f"{MAX_WAIT_S:g}")
 
 
 def _check(args: argparse.Namespace) -> None:
     """What argparse cannot check alone, as UsageError."""
-    checks = [("--rate", args.rate, args.rate > 0 and math.isfinite(args.rate), "> 0"),
-              ("--start-offset", args.start_offset,
-               args.start_offset >= 0 and math.isfinite(args.start_offset), ">= 0"),
-              ("--clock", args.clock, args.clock >= 0 and math.isfinite(args.clock), "> 0 Hz"),
-              ("--queue-depth", args.queue_depth, args.queue_depth >= 1, ">= 1"),
-              ("--wait-for", args.wait_for, args.wait_for >= 0, ">= 0"),
-              ("--wait-timeout", args.wait_timeout, args.wait_timeout >= 0, ">= 0 s")]
-    for name, value, ok, expected in checks:
-        if not ok:
-            raise UsageError(f"{name} = {value}: expected a number {expected}")
+    in_range("-r/--rate", args.rate, *RATE_RANGE, what="a playback speed",
+             note="times the recorded speed")
+    in_range("--start-offset", args.start_offset, 0.0, MAX_OFFSET_S, unit="s",
+             what="a time into the bag")
+    in_range("--clock", args.clock, 0.0, MAX_CLOCK_HZ, unit="Hz",
+             what="a /clock rate", note="(0: no /clock)")
+    whole("--queue-depth", args.queue_depth, 1, MAX_QUEUE_DEPTH, unit="messages",
+          what="a history depth:")
+    whole("--wait-for", args.wait_for, 0, MAX_WAIT_FOR, unit="subscriptions",
+          what="a count:")
+    in_range("--wait-timeout", args.wait_timeout, 0.0, MAX_WAIT_S, unit="s",
+             what="a waiting time")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -131,14 +145,14 @@ def _play(args: argparse.Namespace, argv: list[str], bag: Path, source: Bag, fou
 def main(argv: list[str] | None = None) -> int:
     """The ``drill_sim_replay`` console script: ROS arguments are left to rclpy."""
     argv = sys.argv if argv is None else argv
-    parser = argparse.ArgumentParser(prog="drill_sim_replay", description=DESCRIPTION)
+    parser = Parser(prog="drill_sim_replay", description=DESCRIPTION)
     add_arguments(parser)
     parser.set_defaults(argv=argv)
-    args = parser.parse_args(remove_ros_args(argv)[1:])
     try:
-        return run(args)
+        return run(parser.parse_args(join_negative_values(remove_ros_args(argv)[1:])))
     except UsageError as exc:
-        parser.error(str(exc))      # usage and the message on stderr, status 2, as argparse does
+        print(f"drill_sim_replay: error: {exc}", file=sys.stderr)
+        return 2
 
 
 class _Progress:

@@ -17,7 +17,10 @@ import numpy as np
 
 from ..core import RPM, load_preset
 from ..core.scenario import load_scenario
+from .checks import in_range, new_bag, number, plot_file
 from .errors import UsageError
+
+MAX_DURATION_S = 1e6     # --duration [s] (documented in msg_docs/cli.md, "Limits")
 
 
 def executable(name: str) -> str:
@@ -31,10 +34,11 @@ def executable(name: str) -> str:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenario", default="tag_bottom", help="shipped scenario or YAML file")
     parser.add_argument("--preset", default="base", help="rig preset or preset YAML file")
-    parser.add_argument("--duration", type=float, default=None,
-                        help="wall seconds to run; default: the scenario's duration")
+    parser.add_argument("--duration", type=number, default=None,
+                        help=f"wall seconds to run, up to {MAX_DURATION_S:g}; default: the "
+                             "scenario's duration")
     parser.add_argument("--plot", type=Path, default=Path("drill_sim.png"),
-                        help="PNG written at the end")
+                        help="figure written at the end (.png, .pdf, .svg...)")
     parser.add_argument("--record", type=Path, default=None, metavar="BAG",
                         help="bag directory to record the session into (default: "
                              "drill_sim_session_<date>-<time> here)")
@@ -50,19 +54,22 @@ def run(args: argparse.Namespace) -> int:
     from ..ros.monitor import Monitor
     from .plot import plot_rig_series
 
+    if args.no_record and args.record is not None:
+        raise UsageError(f"--no-record with --record {args.record}: they contradict each other; "
+                         "expected one of them")
     scenario = load_scenario(args.scenario)
     preset = load_preset(args.preset)
-    duration = scenario.duration_s if args.duration is None else args.duration
-    if not 0 < duration < 1e6:
-        raise UsageError(f"--duration = {duration:g}: expected a positive number of seconds")
-    if not args.plot.parent.exists():
-        raise UsageError(f"cannot write {args.plot}: folder {args.plot.parent} does not exist")
-    bag = None if args.no_record else (args.record or Path(
-        datetime.now().strftime("drill_sim_session_%Y_%m_%d-%H_%M_%S")))
-    if bag is not None and (bag.exists() or not bag.absolute().parent.is_dir()):
-        raise UsageError(f"cannot record to {bag}: " + (
-            "it exists already; choose a new name" if bag.exists()
-            else f"folder {bag.absolute().parent} does not exist"))
+    duration = scenario.duration_s if args.duration is None else in_range(
+        "--duration", args.duration, 0.0, MAX_DURATION_S, unit="s", low_open=True,
+        what="a wall time")
+    plot_file("--plot", args.plot)
+    if args.no_record:
+        bag = None
+    elif args.record is not None:
+        bag = new_bag("--record", args.record)
+    else:
+        bag = new_bag("--record", Path(datetime.now().strftime(
+            "drill_sim_session_%Y_%m_%d-%H_%M_%S")))
     node_cmd = [executable("drill_sim_node"), "--ros-args", "-p", f"preset:={args.preset}",
                 "-p", f"initial_state:={scenario.initial_state}",
                 *(("-p", f"record:={bag.absolute()}") if bag is not None else ()),

@@ -18,7 +18,7 @@ def shipped_names(folder: str) -> list[str]:
 
 def read_yaml(kind: str, folder: str, name_or_path: str | Path) -> tuple[str, object]:
     """(name, parsed YAML) of a shipped file by name or of any YAML file; ParameterError if
-    neither exists or the text is not YAML."""
+    neither exists, the file cannot be read, is not UTF-8 text or is not YAML."""
     text_name = str(name_or_path)
     if text_name in shipped_names(folder):
         source = resources.files("drill_sim") / folder / f"{text_name}.yaml"
@@ -28,7 +28,15 @@ def read_yaml(kind: str, folder: str, name_or_path: str | Path) -> tuple[str, ob
         if not path.is_file():
             raise ParameterError(f"{kind} {text_name!r} is neither a shipped {kind} "
                                  f"({', '.join(shipped_names(folder))}) nor a readable YAML file")
-        text, name = path.read_text(encoding="utf-8"), path.stem
+        try:
+            text, name = path.read_text(encoding="utf-8"), path.stem
+        except UnicodeDecodeError as exc:
+            raise ParameterError(f"{kind} {text_name!r} is not a text file: byte "
+                                 f"{exc.object[exc.start]:#04x} at offset {exc.start} is not "
+                                 "UTF-8; expected a YAML text file") from None
+        except OSError as exc:
+            raise ParameterError(f"{kind} {text_name!r} cannot be read: {exc.strerror}; "
+                                 "expected a readable YAML file") from None
     try:
         return name, yaml.safe_load(text)
     except yaml.YAMLError as exc:
