@@ -17,7 +17,7 @@ from drill_sim.wire.qos import BEST_EFFORT
 from drill_sim.wire.rig_messages import RigEncoders
 from drill_sim.wire.rig_topics import COMMAND, OUTPUT, SERVICE, TOPICS
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 NS = "/wire_graph"
 # what every rclpy node offers besides its own interface
 STANDARD_TOPICS = {"/rosout", "/parameter_events"}

@@ -12,7 +12,7 @@ from pathlib import Path
 from conftest import installed
 from rosutil import isolate
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_colcon_build_and_ros2_run_lookup(tmp_path):
