@@ -14,7 +14,7 @@ import numpy as np
 from .. import __version__
 from ..core import ParameterError, Simulator
 from ..study.figure import plot_map
-from ..study.parallel import ClusterError, available_cores, compute
+from ..study.parallel import ClusterError, available_cores, compute, require_distributed
 from ..study.store import MapStore, StoreError, description_path
 from ..study.table import METRIC_NAMES, METRICS, metric_row, metric_units
 from ..study.theory import theory_lines
@@ -56,6 +56,11 @@ def run(args: argparse.Namespace) -> int:
                          "cluster's workers run the points; expected one of them")
     workers = available_cores() if args.workers is None else whole(
         "--workers", args.workers, 1, MAX_WORKERS, what="a process count")
+    if args.scheduler is not None:
+        try:
+            require_distributed()
+        except ClusterError as exc:
+            raise UsageError(f"--scheduler {args.scheduler}: {exc}") from None
     output_file("--out", args.out)
     output_file("--out", description_path(args.out))
     if args.plot is not None:

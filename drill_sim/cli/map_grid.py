@@ -122,7 +122,7 @@ def parse_values(q: Quantity, text: str, low: float, high: float, log: bool) -> 
         except ValueError:
             raise UsageError(f"{q.option} {text}: count {parts[2]!r} is not a whole number; "
                              "expected start:stop:count such as 20:300:30") from None
-        whole(f"{q.option} {text}: count", count, 2, MAX_AXIS_POINTS, what="a point count")
+        whole(f"{q.option} {text}: count", count, 2, MAX_AXIS_POINTS)
         if not start < stop:
             raise UsageError(f"{q.option} {text}: start is not below stop; expected an "
                              "increasing range start:stop:count")

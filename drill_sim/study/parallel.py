@@ -88,13 +88,19 @@ def worker_version() -> str:
     return __version__
 
 
-def _on_dask(points: Sequence[RunSettings], address: str) -> Iterator[tuple[int, Metrics]]:
+def require_distributed() -> None:
+    """ClusterError, saying how to install it, when Dask's distributed cannot be imported."""
     try:
-        from distributed import Client
-        from distributed import as_completed as dask_completed
+        import distributed  # noqa: F401
     except ImportError:
-        raise ClusterError(f"--scheduler needs Dask's distributed package, which is not "
+        raise ClusterError(f"a Dask cluster needs Dask's distributed package, which is not "
                            f"installed: {INSTALL_HINT}") from None
+
+
+def _on_dask(points: Sequence[RunSettings], address: str) -> Iterator[tuple[int, Metrics]]:
+    require_distributed()
+    from distributed import Client
+    from distributed import as_completed as dask_completed
     try:
         client = Client(address, timeout=20, set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
