@@ -219,7 +219,9 @@ def build_grid(args: argparse.Namespace) -> Grid:
         preset, groups = load_preset(args.preset or "base"), None
         weight_kn = preset.rig.submerged_weight_n / 1e3
         load = "hook_load_kn" if args.hook_load_kn is not None else "wob_kn"
-        default_wob = DEFAULT_WOB_KN if weight_kn >= 250 else f"50:{weight_kn:.6g}:30"
+        high = min(250.0, weight_kn)              # the default range, within W_s
+        default_wob = DEFAULT_WOB_KN if high == 250.0 else f"{min(50.0, 0.2 * high):.6g}:" \
+            f"{high:.6g}:30"
         texts = {"rpm": args.rpm or DEFAULT_RPM,
                  load: args.hook_load_kn if load == "hook_load_kn" else args.wob_kn or default_wob}
         defaults = {}
