@@ -22,7 +22,14 @@ from ..terminal import Progress
 from .checks import integer, output_file, plot_file, whole
 from .errors import UsageError
 from .map_grid import BY_DEST, Grid, add_quantity_arguments, build_grid
-from .single import Timing, add_run_arguments, resolve_start, resolve_timing, run_settings
+from .single import (
+    RUN_OPTIONS,
+    Timing,
+    add_run_arguments,
+    resolve_start,
+    resolve_timing,
+    run_settings,
+)
 
 MAX_WORKERS = 1024
 FINE = 160               # points per axis on which the theory lines are evaluated
@@ -129,7 +136,7 @@ def _compute(args: argparse.Namespace, grid: Grid, points: list, pending: list[i
             v = grid.values(p)
             row = metric_row(metrics, points[p].omega0, grid.preset.rig if grid.si else None)
             store.append(p, [v[grid.x.dest], v[grid.y.dest], *row.values()])
-            progress.label = f"map {done_before + n}/{grid.size} points"
+            progress.label = f"map {done_before + n:>{len(str(grid.size))}}/{grid.size} points"
             progress(n / len(pending))
     except ClusterError as exc:
         raise UsageError(f"--scheduler {args.scheduler}: {exc}") from None
@@ -157,8 +164,9 @@ def _description(args: argparse.Namespace, grid: Grid, timing: Timing,
         "y": {"quantity": grid.y.column, "values": grid.y_values.tolist()},
         "fixed": {BY_DEST[d].column: v for d, v in grid.fixed.items()},
         "time_unit": timing.unit, "dt": timing.dt, "duration": timing.duration,
-        "metrics_window": timing.window, "start": args.start or "steady where it exists, else rest",
-        "gap": args.gap, "perturbation": args.perturbation}
+        "metrics_window": timing.window,
+        **{name: getattr(args, name) for name in RUN_OPTIONS}}
+    settings["start"] = settings["start"] or "steady where it exists, else rest"
     units = {"point": "index: x index * len(y values) + y index", grid.x.column: grid.x.unit,
              grid.y.column: grid.y.unit, **metric_units(grid.si)}
     return {"settings": settings, "columns": {c: units[c] for c in columns},

@@ -4,6 +4,9 @@ metrics window, start, gap and perturbation, each checked within its documented 
 
 Both commands build their runs with ``run_settings`` and run them with
 ``drill_sim.study.run_single``, so a map point is the simulation ``simulate`` runs, bit for bit.
+A new model option (a string model, a top-drive controller) is one more argument here, listed in
+``RUN_OPTIONS`` (a map records it among its settings), one more ``RunSettings`` field filled in
+``run_settings``, and its use in ``run_single``: both commands then pass it to every run.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ STEPS_PER_S = 20e6             # for the time estimate in a refusal
 GAP_MAX_M = 10.0               # bit height above bottom, SI [m]
 GAP_MAX = 1e4                  # the same, dimensionless [L*]
 PERTURBATION_RANGE = (-0.9, 1.0)
+RUN_OPTIONS = ("start", "gap", "perturbation")   # as typed; the times are in ``Timing``
 
 
 @dataclass(frozen=True)

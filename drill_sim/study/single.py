@@ -3,7 +3,8 @@
 ``RunSettings`` describes a run completely in dimensionless units (a few numbers, cheap to send
 to another process or machine); ``run_single`` runs it and returns the sampled trajectories, if
 asked for, and the metrics over the run's last part (the metrics window); ``point_metrics`` is
-the function a map sends to its workers.
+the function a map sends to its workers. A new model option (a string model, a top-drive
+controller) is one more field of ``RunSettings`` used in ``run_single``.
 """
 
 from __future__ import annotations
