@@ -139,6 +139,8 @@ def _compute(args: argparse.Namespace, grid: Grid, points: list, pending: list[i
             progress.label = f"map {done_before + n:>{len(str(grid.size))}}/{grid.size} points"
             progress(n / len(pending))
     except ClusterError as exc:
+        progress.close()
+        store.close()
         raise UsageError(f"--scheduler {args.scheduler}: {exc}") from None
     except BaseException:
         progress.close()
