@@ -30,7 +30,8 @@ setup(
     ],
     extras_require={
         "test": ["pytest>=8", "hypothesis>=6.100", "ruff>=0.6", "colcon-common-extensions>=0.3",
-                 "rosbags>=0.10", "mcap-ros2-support>=0.5"],
+                 "rosbags>=0.10", "mcap-ros2-support>=0.5", "dask[distributed]>=2024.1"],
+        "map-cluster": ["dask[distributed]>=2024.1"],   # drill_sim map --scheduler
     },
     zip_safe=False,
     maintainer="drill_sim developers",

@@ -118,7 +118,7 @@ def resolve_case(args: argparse.Namespace) -> Case:
         hook_kn = in_range("--hook-load-kn", args.hook_load_kn, 0.0, 2.0 * weight_kn, unit="kN",
                            what=f"a hook load from 0 to twice the {preset.name} string's "
                                 f"submerged weight W_s = {weight_kn:.1f} kN:")
-        wob_kn = weight_kn - hook_kn
+        wob_kn = wob_from_hook_load_kn(preset, hook_kn)
     elif args.wob_kn is not None:
         wob_kn = in_range("--wob-kn", args.wob_kn, -weight_kn, weight_kn, unit="kN",
                           what=f"an available weight within the {preset.name} string's "
@@ -128,5 +128,16 @@ def resolve_case(args: argparse.Namespace) -> Case:
                           preset.weight_on_bit_kn, -weight_kn, weight_kn, unit="kN",
                           what=f"an available weight within the string's submerged weight "
                                f"W_s = {weight_kn:.1f} kN:")
-    sc = rig.scales
-    return Case(rig.groups, 1e3 * wob_kn / sc.force_n, rpm * RPM * sc.time_s, preset)
+    return si_case(preset, rpm, wob_kn)
+
+
+def si_case(preset: Preset, rpm: float, wob_kn: float) -> Case:
+    """The Case of ``preset`` at top-drive speed ``rpm`` [rpm] and available weight W0 ``wob_kn``
+    [kN]: the one conversion ``simulate`` and every point of ``map`` use."""
+    sc = preset.rig.scales
+    return Case(preset.rig.groups, 1e3 * wob_kn / sc.force_n, rpm * RPM * sc.time_s, preset)
+
+
+def wob_from_hook_load_kn(preset: Preset, hook_load_kn: float) -> float:
+    """Available weight W0 = W_s - H0 [kN] of ``preset``'s string at hook load H0 [kN]."""
+    return preset.rig.submerged_weight_n / 1e3 - hook_load_kn

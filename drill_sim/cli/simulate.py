@@ -4,18 +4,19 @@ from __future__ import annotations
 
 import argparse
 import csv
-import math
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from ..core import DEFAULT_DT, RPM, NoSteadyDrilling, Simulator, Trajectory
+from ..core import RPM, Trajectory
+from ..study.single import run_single
 from ..terminal import Progress
 from .case import Case, add_model_arguments, resolve_case
 from .checks import in_range, json_line, number, output_file, plot_file, typed
 from .errors import UsageError
 from .plot import plot_time_series
+from .single import add_run_arguments, amount, resolve_start, resolve_timing, run_settings
 
 SI_COLUMNS = ("time_s", "bit_speed_rad_s", "rop_m_s", "wob_n", "tob_nm", "surface_torque_nm",
               "depth_of_cut_m", "bit_depth_m", "top_drive_speed_rad_s", "stuck", "off_bottom")
@@ -23,40 +24,18 @@ GROUP_COLUMNS = ("tau", "omega", "v", "w", "t", "ts", "delta_n", "u", "omega0", 
                  "off_bottom")
 
 
-# The documented limits (msg_docs/cli.md, "Limits").
-DT_RANGE = (1e-6, 0.05)        # fixed step [t*]; 0.05 is the core's own upper bound
-MAX_STEPS = 1_000_000_000      # about a minute of one core at the measured 20+ million steps/s
-STEPS_PER_S = 20e6             # for the time estimate in the refusal
+# The documented limits (msg_docs/cli.md, "Limits"); the run's own are in cli/single.py.
 MAX_ROWS = 1_000_000           # samples held for --out and --plot
 BYTES_PER_ROW = 600            # held at the peak, all copies together (estimate)
-GAP_MAX_M = 10.0               # bit height above bottom, SI [m]
-GAP_MAX = 1e4                  # the same, dimensionless [L*]
-PERTURBATION_RANGE = (-0.9, 1.0)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_model_arguments(parser)
-    parser.add_argument("--duration", type=number, default=None,
-                        help="simulated time [s] (SI) or [t*] (groups); default 60 s or 300 t*; "
-                             f"at most {MAX_STEPS:,} steps")
-    parser.add_argument("--dt", type=number, default=None,
-                        help=f"fixed step [s] or [t*], {DT_RANGE[0]:g} to {DT_RANGE[1]:g} t*; "
-                             f"default {DEFAULT_DT:g} t*")
-    parser.add_argument("--start", choices=("steady", "rest"), default=None,
-                        help="exact steady drilling (default when it exists) or bit at rest")
-    parser.add_argument("--gap", type=number, default=0.0,
-                        help=f"with --start rest: height of the bit above bottom, 0 to "
-                             f"{GAP_MAX_M:g} m or 0 to {GAP_MAX:g} L*")
-    parser.add_argument("--perturbation", type=number, default=1e-3,
-                        help="relative perturbation of the initial bit speed (steady start), "
-                             f"{PERTURBATION_RANGE[0]:g} to {PERTURBATION_RANGE[1]:g}")
+    add_run_arguments(parser, duration_default="60 s or 300 t*")
     parser.add_argument("--out", type=Path, help="CSV file of the time series")
     parser.add_argument("--output-interval", type=number, default=None,
                         help="CSV/plot sampling interval [s] or [t*]; default 0.01 s or 0.05 t*; "
                              f"at most {MAX_ROWS:,} samples")
-    parser.add_argument("--metrics-window", type=number, default=None,
-                        help="metrics over the last this much time [s] or [t*]; default: last "
-                             "half")
     parser.add_argument("--plot", type=Path,
                         help="figure of bit speed, WOB and TOB against time (.png, .pdf, .svg...)")
     parser.add_argument("--json", action="store_true",
@@ -65,19 +44,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     case = resolve_case(args)
-    t_star = case.preset.rig.scales.time_s if case.si else 1.0   # user time unit -> t*
-    unit = "s" if case.si else "t*"
-    dt = DEFAULT_DT * t_star if args.dt is None else in_range(
-        "--dt", args.dt, DT_RANGE[0] * t_star, DT_RANGE[1] * t_star, unit=unit,
-        what="a time step", note=f"({DT_RANGE[0]:g} to {DT_RANGE[1]:g} t*, t* = {t_star:.4g} s)"
-        if case.si else "")
-    duration = _duration(args, dt, unit, 60.0 if case.si else 300.0)
+    timing = resolve_timing(args, case, 60.0, 300.0)
+    unit, duration, dt = timing.unit, timing.duration, timing.dt
     interval = (0.01 if case.si else 0.05) if args.output_interval is None else in_range(
         "--output-interval", args.output_interval, 0.0, duration, unit=unit, low_open=True,
         what="a sampling interval within --duration")
-    window = 0.5 * duration if args.metrics_window is None else in_range(
-        "--metrics-window", args.metrics_window, dt, duration, unit=unit,
-        what="a window of at least one step, within --duration")
     keep_rows = args.out is not None or args.plot is not None
     if keep_rows:
         _check_rows(args, duration, dt, interval, unit)
@@ -85,42 +56,17 @@ def run(args: argparse.Namespace) -> int:
         output_file("--out", args.out)
     if args.plot is not None:
         plot_file("--plot", args.plot)
-    gap = in_range("--gap", args.gap, 0.0, GAP_MAX_M if case.si else GAP_MAX,
-                   unit="m" if case.si else "L*", what="a bit height above bottom")
-    perturbation = in_range("--perturbation", args.perturbation, *PERTURBATION_RANGE,
-                            what="a relative perturbation of the bit speed")
-    drilling = case.w0 > case.groups.lam and case.omega0 > 0
-    start = args.start or ("steady" if drilling else "rest")
-    if start == "steady" and case.omega0 == 0:
-        raise UsageError(f"--start steady with {'--rpm' if case.si else '--omega0'} 0: there is "
-                         "no steady drilling without rotation; expected a top-drive speed > 0 or "
-                         "--start rest")
+    gap, perturbation = resolve_start(args, case)
+    settings = run_settings(case, timing, args.start, gap, perturbation)
 
-    sim = Simulator(case.groups, dt / t_star)
-    if start == "steady":
-        try:
-            sim.start_steady(case.w0, case.omega0, perturbation)
-        except NoSteadyDrilling as exc:
-            raise UsageError(f"--start steady: {exc}") from None
-    else:
-        sim.start_at_rest(gap / case.preset.rig.scales.length_m if case.si else gap)
-        sim.set_commands(case.w0, case.omega0)
-
-    sampling = interval / t_star if keep_rows else None      # None: keep no samples
-    lead = (duration - window) / t_star       # run before the metrics window
     progress = Progress("simulating")
-    parts = []
-    if lead > 0:
-        parts.append(sim.run(lead, output_interval=sampling,
-                             progress=lambda f: progress(f * (1 - window / duration))))
-    sim.reset_window()
-    parts.append(sim.run(window / t_star, output_interval=sampling,
-                         progress=lambda f: progress(1 - window / duration * (1 - f))))
+    result = run_single(settings, output_interval=interval / timing.t_star_s if keep_rows
+                        else None, progress=progress)   # None: keep no samples
     progress.close()
-    summary = _summary(case, parts[-1], start, duration, window, dt)
+    summary = _summary(case, result.parts[-1], settings.start, duration, timing.window, dt)
 
     if keep_rows:
-        columns = _columns(case, *parts)
+        columns = _columns(case, *result.parts)
         if args.out is not None:
             _write_csv(args.out, columns)
         if args.plot is not None:
@@ -130,28 +76,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         _print_summary(summary, args)
     return 0
-
-
-def _duration(args: argparse.Namespace, dt: float, unit: str, default: float) -> float:
-    """--duration checked: at least one step of ``dt`` and at most MAX_STEPS steps."""
-    if args.duration is None:
-        duration = default
-    else:
-        duration = args.duration
-        if not (math.isfinite(duration) and duration >= dt):
-            raise UsageError(f"--duration {typed(duration)}: "
-                             f"{'too short' if math.isfinite(duration) else 'not a finite number'}"
-                             f"; expected a simulated time of at least one step, dt = {dt:.4g} "
-                             f"{unit}")
-    steps = duration / dt
-    if steps > MAX_STEPS:
-        given = f"--dt {typed(args.dt)}" if args.dt is not None else f"the default dt {dt:.4g}"
-        cost = f", about {_wall_time(steps / STEPS_PER_S)} of computing" \
-            if math.isfinite(steps) else ""
-        raise UsageError(
-            f"--duration {typed(duration)} {unit} at {given} {unit} is {_amount(steps)} steps"
-            f"{cost}; expected at most {MAX_STEPS:,} steps: shorten --duration or raise --dt")
-    return duration
 
 
 def _check_rows(args: argparse.Namespace, duration: float, dt: float, interval: float,
@@ -165,24 +89,9 @@ def _check_rows(args: argparse.Namespace, duration: float, dt: float, interval: 
         option = "--out" if args.out is not None else "--plot"
         raise UsageError(
             f"--duration {typed(duration)} {unit} at {given} {unit} would hold "
-            f"{_amount(rows)} samples (about {rows * BYTES_PER_ROW / 1e9:.3g} GB) for "
+            f"{amount(rows)} samples (about {rows * BYTES_PER_ROW / 1e9:.3g} GB) for "
             f"{option}; expected at most {MAX_ROWS:,} samples: shorten --duration or raise "
             "--output-interval")
-
-
-def _amount(x: float) -> str:
-    """A count, in full up to 1e12."""
-    if not math.isfinite(x):
-        return "more than 1e308"
-    return f"{x:,.0f}" if x < 1e12 else f"{x:.3g}"
-
-
-def _wall_time(seconds: float) -> str:
-    for size, name in ((365.25 * 86400, "years"), (86400, "days"), (3600, "hours"),
-                       (60, "minutes")):
-        if seconds >= size:
-            return f"{seconds / size:.3g} {name}"
-    return f"{seconds:.3g} s"
 
 
 def _columns(case: Case, *parts: Trajectory) -> dict[str, np.ndarray]:
