@@ -1,4 +1,4 @@
-"""Steady drilling (MODEL.md section 4) and the roots of Delta(s) (section 5)."""
+"""Steady drilling (model contract, section 4) and the roots of Delta(s) (section 5)."""
 
 from __future__ import annotations
 

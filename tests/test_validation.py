@@ -1,5 +1,5 @@
-"""The simulator against theory: MODEL.md sections 4-6, each a number that would be wrong if the
-physics or the numerics were. Run lengths are stated in units of t*."""
+"""The simulator against theory (model contract, sections 4-6), each a number that would be
+wrong if the physics or the numerics were. Run lengths are stated in units of t*."""
 
 from __future__ import annotations
 

@@ -3,13 +3,17 @@
 Scheme (a Moreau midpoint time-stepping scheme, second order in smooth phases):
 
 1. drift half a step: u_m = u + h/2 v, phi_m = phi + h/2 omega, phi_td_m = phi_td + h/2 omega0;
-2. evaluate the depth of cut delta = u_m - S(phi_m) on the rock surface left by earlier passes;
-3. solve the set-valued laws of MODEL.md section 2.2 *implicitly* for the end-of-step velocities
-   (the wear-flat factor g from the sign of v+, stick from the sign of omega+, the rock reaction
-   from the sign of v+ while stuck): each is a one-dimensional complementarity problem solved
-   exactly by trying its branches, so no law is ever regularised;
+2. evaluate the depth of cut delta = u_m - S(phi_m) on the rock surface left by earlier passes
+   (``_surface_at``);
+3. solve the set-valued laws of the model contract (section 2.2, msg_docs/model.md) *implicitly*
+   for the end-of-step velocities (``_bit_rock_law``): the wear-flat factor g from the sign of v+
+   (``_contact_law``), stick from the sign of omega+ and the breakaway torque (``_stick_holds``),
+   the rock reaction from the sign of v+ while stuck (``_stick_reaction``); each is a
+   one-dimensional complementarity problem solved exactly by trying its branches, so no law is
+   ever regularised; then the drawworks' hoisting-speed limit (``_hoist_limit``);
 4. drift the second half with the new velocities and let the blades sweep the surface:
-   S(theta) <- max(S(theta), u) at every grid node passed.
+   S(theta) <- max(S(theta), u) at every grid node passed (``_sweep_surface``); add the step to
+   the window integrals (``_accumulate``).
 
 The surface is an array of N = 2^m nodes over one sector 2*pi/n, linear between nodes. All state
 lives in preallocated arrays indexed by the constants below, so advancing allocates nothing.
@@ -63,7 +67,7 @@ NO = 14
 
 @njit(cache=True, inline="always")
 def _surface_at(surf, mask, phi, inv_dtheta, k_last, s_behind):
-    """S(phi) before the current pass, linear between nodes."""
+    """The rock surface S(phi) before the current pass, linear between nodes."""
     pos = phi * inv_dtheta
     km = math.floor(pos)
     frac = pos - km
@@ -76,6 +80,127 @@ def _surface_at(surf, mask, phi, inv_dtheta, k_last, s_behind):
     return s0 + frac * (s1 - s0)
 
 
+@njit(cache=True, inline="always")
+def _stick_holds(ts, v, hpsi, w0, nd, beta_lam):
+    """The stick law: a stuck bit stays stuck while T_s <= T_max.
+
+    T_max = n delta + beta lambda (cutting plus fully mobilised wear-flat friction) while the
+    bit is pressed on the rock; n delta alone when it would lift off (friction lost).
+    """
+    if v + hpsi * w0 >= 0.0:
+        t_max = nd + beta_lam
+    else:
+        t_max = nd
+    return ts <= t_max
+
+
+@njit(cache=True, inline="always")
+def _contact_law(v, hpsi, w0, nd, lam):
+    """Cutting plus wear-flat contact with the complementarity on g; returns (g, v+).
+
+    g = 1 if v+ > 0, g = 0 if v+ < 0, and g in [0, 1] keeping v+ = 0 (an axial stick): each
+    branch is tried in turn on the implicit axial update v+ = v + h psi (w0 - n delta - lam g).
+    """
+    v1 = v + hpsi * (w0 - nd - lam)              # branch g = 1 (v+ > 0)
+    if v1 > 0.0:
+        return 1.0, v1
+    v0 = v + hpsi * (w0 - nd)                    # branch g = 0 (v+ < 0)
+    if v0 < 0.0:
+        return 0.0, v0
+    g = v0 / (hpsi * lam) if lam > 0.0 else 0.0  # axial stick, g in [0, 1]
+    return g, 0.0
+
+
+@njit(cache=True, inline="always")
+def _stick_reaction(v, om, ts, w0, h, hpsi):
+    """Omega+ = 0 held by the rock: the torque is the reaction; returns (v+, w, t, g).
+
+    The rock only pushes: a bit moving down or resting stops (v+ = 0, w is the reaction);
+    a bit that would rise keeps rising off the wear flats (the one-way axial hold).
+    """
+    t = ts + om / h
+    v_try = v + hpsi * w0
+    if v_try > 0.0:
+        return 0.0, w0 + v / hpsi, t, 1.0
+    return v_try, 0.0, t, 0.0
+
+
+@njit(cache=True, inline="always")
+def _bit_rock_law(delta, regime, v, om, ts, w0, n, lam, beta, h, hpsi):
+    """The set-valued bit-rock laws for one step; returns (regime, w, t, g, v+, omega+).
+
+    Off bottom (delta < 0) nothing acts; in contact a stuck bit stays stuck while the stick law
+    holds, otherwise the contact law gives g and v+, and a bit that would turn backwards is
+    stuck instead (no backward rotation in contact).
+    """
+    if delta < 0.0:
+        regime = REGIME_OFF_BOTTOM
+        w = 0.0
+        t = 0.0
+        g = 0.0
+        v_new = v + hpsi * w0
+        om_new = om + h * ts
+    else:
+        nd = n * delta
+        stuck = regime == REGIME_STUCK and _stick_holds(ts, v, hpsi, w0, nd, beta * lam)
+        if not stuck:
+            g, v_new = _contact_law(v, hpsi, w0, nd, lam)
+            w = nd + lam * g
+            t = nd + beta * lam * g
+            om_new = om + h * (ts - t)
+            if om_new > 0.0:
+                regime = REGIME_ROTATING
+            else:
+                stuck = True
+        if stuck:
+            regime = REGIME_STUCK
+            om_new = 0.0
+            v_new, w, t, g = _stick_reaction(v, om, ts, w0, h, hpsi)
+    return regime, w, t, g, v_new, om_new
+
+
+@njit(cache=True, inline="always")
+def _hoist_limit(v_new, v_min, hpsi):
+    """The drawworks holds the string back: v+ >= v_min; returns (v+, hoist force)."""
+    if v_new < v_min:
+        return v_min, (v_min - v_new) / hpsi
+    return v_new, 0.0
+
+
+@njit(cache=True, inline="always")
+def _first_swept_node(k_last, k_new, n_nodes):
+    """The blade sweep: the first node (absolute index) the blades pass in a step that ends
+    past node ``k_new``; at most one sector's ``n_nodes`` nodes are swept in a step."""
+    k_first = k_last + 1
+    if k_new - k_first >= n_nodes:
+        k_first = k_new - n_nodes + 1
+    return k_first
+
+
+@njit(cache=True, inline="always")
+def _blade_height(theta, phi, dphi, u, u_new):
+    """The blade sweep: the bit's axial position when a blade passes the angle ``theta`` in
+    a step from (phi, u) to (phi + dphi, u_new), u linear in phi over the step."""
+    frac = (theta - phi) / dphi
+    return u + frac * (u_new - u)
+
+
+@njit(cache=True, inline="always")
+def _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist):
+    """The window integrals (forces act over the whole step); ``a`` is the tuple
+    (time, omega, w, t, ts, v, stick, bounce, work top drive, work weight, work hoist,
+    dissipated rotation, dissipated axial) and the updated tuple is returned."""
+    (a_time, a_om, a_w, a_t, a_ts, a_v, a_stick, a_bounce, a_wtd, a_ww, a_wh, a_drot,
+     a_dax) = a
+    if regime == REGIME_STUCK:
+        a_stick += h
+    elif regime == REGIME_OFF_BOTTOM:
+        a_bounce += h
+    return (a_time + h, a_om + h * om_bar, a_w + h * w, a_t + h * t, a_ts + h * ts,
+            a_v + h * v_bar, a_stick, a_bounce, a_wtd + h * ts * om0, a_ww + h * w0 * v_bar,
+            a_wh + h * f_hoist * v_bar, a_drot + h * t * om_bar, a_dax + h * w * v_bar)
+
+
 @njit(cache=True)
 def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     """Advance the state by ``n_steps`` fixed steps; return the next free row of ``out``.
@@ -83,53 +208,28 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     Every ``out_every`` global steps a row of outputs is written to ``out`` while rows remain.
     """
     n = p[P_N]
-    psi = p[P_PSI]
     lam = p[P_LAM]
     beta = p[P_BETA]
     h = p[P_H]
     h2 = 0.5 * h
-    hpsi = h * psi
+    hpsi = h * p[P_PSI]
     inv_dth = p[P_INV_DTHETA]
     dth = p[P_DTHETA]
     w0 = c[C_W0]
     om0 = c[C_OMEGA0]
     v_min = c[C_V_MIN]
-    mask = surf.shape[0] - 1
     n_nodes = surf.shape[0]
+    mask = n_nodes - 1
     rows = out.shape[0]
 
-    tau = x[X_TAU]
-    u = x[X_U]
-    v = x[X_V]
-    phi = x[X_PHI]
-    om = x[X_OMEGA]
-    ptd = x[X_PHI_TD]
-    s_behind = x[X_S_BEHIND]
-    hole = x[X_HOLE]
-    since_stick = x[X_SINCE_STICK]
-    k_last = k[K_LAST]
-    regime = k[K_REGIME]
-    steps = k[K_STEPS]
-    w = x[X_W]
-    t = x[X_T]
-    delta = x[X_DELTA]
-    g = x[X_G]
-
-    a_time = acc[A_TIME]
-    a_om = acc[A_OMEGA]
-    a_om_min = acc[A_OMEGA_MIN]
-    a_om_max = acc[A_OMEGA_MAX]
-    a_w = acc[A_W]
-    a_t = acc[A_T]
-    a_ts = acc[A_TS]
-    a_v = acc[A_V]
-    a_stick = acc[A_STICK_TIME]
-    a_bounce = acc[A_BOUNCE_TIME]
-    a_wtd = acc[A_WORK_TOP_DRIVE]
-    a_ww = acc[A_WORK_WEIGHT]
-    a_wh = acc[A_WORK_HOIST]
-    a_drot = acc[A_DISSIPATED_ROT]
-    a_dax = acc[A_DISSIPATED_AX]
+    tau, u, v, phi, om, ptd = x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD]
+    s_behind, hole, since_stick = x[X_S_BEHIND], x[X_HOLE], x[X_SINCE_STICK]
+    w, t, delta, g = x[X_W], x[X_T], x[X_DELTA], x[X_G]
+    k_last, regime, steps = k[K_LAST], k[K_REGIME], k[K_STEPS]
+    a_om_min, a_om_max = acc[A_OMEGA_MIN], acc[A_OMEGA_MAX]
+    a = (acc[A_TIME], acc[A_OMEGA], acc[A_W], acc[A_T], acc[A_TS], acc[A_V], acc[A_STICK_TIME],
+         acc[A_BOUNCE_TIME], acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST],
+         acc[A_DISSIPATED_ROT], acc[A_DISSIPATED_AX])
 
     for _ in range(n_steps):
         # 1. half drift
@@ -137,113 +237,35 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
         phi_m = phi + h2 * om
         ptd_m = ptd + h2 * om0
         ts = ptd_m - phi_m
-
         # 2. depth of cut on the surface left by earlier passes
         delta = u_m - _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
-
         # 3. set-valued laws, solved for the end-of-step velocities
-        if delta < 0.0:
-            regime = REGIME_OFF_BOTTOM
-            w = 0.0
-            t = 0.0
-            g = 0.0
-            v_new = v + hpsi * w0
-            om_new = om + h * ts
-        else:
-            nd = n * delta
-            stuck = False
-            if regime == REGIME_STUCK:
-                # stays stuck while T_s <= T_max; full friction only while pressed on the rock
-                if v + hpsi * w0 >= 0.0:
-                    t_max = nd + beta * lam
-                else:
-                    t_max = nd
-                stuck = ts <= t_max
-            if not stuck:
-                v1 = v + hpsi * (w0 - nd - lam)          # branch g = 1 (v+ > 0)
-                if v1 > 0.0:
-                    g = 1.0
-                    v_new = v1
-                else:
-                    v0 = v + hpsi * (w0 - nd)           # branch g = 0 (v+ < 0)
-                    if v0 < 0.0:
-                        g = 0.0
-                        v_new = v0
-                    else:                               # axial stick, g in [0, 1]
-                        g = v0 / (hpsi * lam) if lam > 0.0 else 0.0
-                        v_new = 0.0
-                w = nd + lam * g
-                t = nd + beta * lam * g
-                om_free = om + h * (ts - t)
-                if om_free > 0.0:
-                    regime = REGIME_ROTATING
-                    om_new = om_free
-                else:
-                    stuck = True
-            if stuck:
-                # omega+ = 0, torque is the reaction; the rock only pushes (v+ <= 0)
-                regime = REGIME_STUCK
-                om_new = 0.0
-                t = ts + om / h
-                g = 1.0
-                v_try = v + hpsi * w0
-                if v_try > 0.0:
-                    v_new = 0.0
-                    w = w0 + v / hpsi
-                else:
-                    v_new = v_try
-                    w = 0.0
-                    g = 0.0
-
-        # hoisting-speed limit: the drawworks holds the string back
-        f_hoist = 0.0
-        if v_new < v_min:
-            f_hoist = (v_min - v_new) / hpsi
-            v_new = v_min
-
+        regime, w, t, g, v_new, om_new = _bit_rock_law(delta, regime, v, om, ts, w0, n, lam,
+                                                       beta, h, hpsi)
+        v_new, f_hoist = _hoist_limit(v_new, v_min, hpsi)
         # 4. second half drift and the sweep of the blades over the rock
         v_bar = 0.5 * (v + v_new)
         om_bar = 0.5 * (om + om_new)
         u_new = u_m + h2 * v_new
         phi_new = phi_m + h2 * om_new
+        # the blades sweep the rock: S <- max(S, u) at every node passed; backward rotation
+        # (possible only off bottom) cuts nothing
         k_new = np.int64(math.floor(phi_new * inv_dth))
         if k_new > k_last:
-            k_first = k_last + 1
-            if k_new - k_first >= n_nodes:
-                k_first = k_new - n_nodes + 1
             dphi = phi_new - phi
-            for kk in range(k_first, k_new + 1):
-                frac = (kk * dth - phi) / dphi
-                uc = u + frac * (u_new - u)
+            for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
+                uc = _blade_height(kk * dth, phi, dphi, u, u_new)
                 j = kk & mask
-                old = surf[j]
-                if uc > old:
+                s_behind = surf[j]             # the node's value before this pass
+                if uc > s_behind:
                     surf[j] = uc
                     if uc > hole:
                         hole = uc
-                s_behind = old
             k_last = k_new
         elif k_new < k_last:
-            # backward rotation, possible only off bottom: nothing is cut
             k_last = k_new
             s_behind = surf[k_new & mask]
-
-        # accumulate the window integrals (forces act over the whole step)
-        a_time += h
-        a_om += h * om_bar
-        a_w += h * w
-        a_t += h * t
-        a_ts += h * ts
-        a_v += h * v_bar
-        if regime == REGIME_STUCK:
-            a_stick += h
-        elif regime == REGIME_OFF_BOTTOM:
-            a_bounce += h
-        a_wtd += h * ts * om0
-        a_ww += h * w0 * v_bar
-        a_wh += h * f_hoist * v_bar
-        a_drot += h * t * om_bar
-        a_dax += h * w * v_bar
+        a = _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist)
 
         u = u_new
         v = v_new
@@ -260,7 +282,6 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             since_stick = 0.0
         else:
             since_stick += h
-
         if out_row < rows and steps % out_every == 0:
             out[out_row, O_TAU] = tau
             out[out_row, O_U] = u
@@ -278,38 +299,14 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             out[out_row, O_G] = g
             out_row += 1
 
-    x[X_TAU] = tau
-    x[X_U] = u
-    x[X_V] = v
-    x[X_PHI] = phi
-    x[X_OMEGA] = om
-    x[X_PHI_TD] = ptd
-    x[X_S_BEHIND] = s_behind
-    x[X_HOLE] = hole
-    x[X_SINCE_STICK] = since_stick
-    x[X_W] = w
-    x[X_T] = t
-    x[X_TS] = ptd - phi
-    x[X_DELTA] = delta
-    x[X_G] = g
-    k[K_LAST] = k_last
-    k[K_REGIME] = regime
-    k[K_STEPS] = steps
-    acc[A_TIME] = a_time
-    acc[A_OMEGA] = a_om
-    acc[A_OMEGA_MIN] = a_om_min
-    acc[A_OMEGA_MAX] = a_om_max
-    acc[A_W] = a_w
-    acc[A_T] = a_t
-    acc[A_TS] = a_ts
-    acc[A_V] = a_v
-    acc[A_STICK_TIME] = a_stick
-    acc[A_BOUNCE_TIME] = a_bounce
-    acc[A_WORK_TOP_DRIVE] = a_wtd
-    acc[A_WORK_WEIGHT] = a_ww
-    acc[A_WORK_HOIST] = a_wh
-    acc[A_DISSIPATED_ROT] = a_drot
-    acc[A_DISSIPATED_AX] = a_dax
+    x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD] = tau, u, v, phi, om, ptd
+    x[X_S_BEHIND], x[X_HOLE], x[X_SINCE_STICK] = s_behind, hole, since_stick
+    x[X_W], x[X_T], x[X_TS], x[X_DELTA], x[X_G] = w, t, ptd - phi, delta, g
+    k[K_LAST], k[K_REGIME], k[K_STEPS] = k_last, regime, steps
+    (acc[A_TIME], acc[A_OMEGA], acc[A_W], acc[A_T], acc[A_TS], acc[A_V], acc[A_STICK_TIME],
+     acc[A_BOUNCE_TIME], acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST],
+     acc[A_DISSIPATED_ROT], acc[A_DISSIPATED_AX]) = a
+    acc[A_OMEGA_MIN], acc[A_OMEGA_MAX] = a_om_min, a_om_max
     acc[A_W0] += n_steps * h * w0
     acc[A_OMEGA0] += n_steps * h * om0
     return out_row

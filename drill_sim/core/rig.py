@@ -16,7 +16,7 @@ from .stability import SteadyState, steady_state
 
 RPM = 2.0 * math.pi / 60.0   # rad/s per rpm
 
-# The bit's regime in the last step, as the kernel decides it (MODEL.md section 2.2); published
+# The bit's regime in the last step, as the kernel decides it (model contract, 2.2); published
 # by the node and recorded, so every consumer uses the kernel's own decision.
 REGIME_ROTATING, REGIME_STUCK, REGIME_OFF_BOTTOM = (kn.REGIME_ROTATING, kn.REGIME_STUCK,
                                                    kn.REGIME_OFF_BOTTOM)

@@ -2,7 +2,8 @@
 
 ``Simulator`` owns the state arrays of the kernel and is what the ROS node advances every tick.
 ``Simulator.run`` is the offline driver, returning a ``Trajectory`` with named columns.
-All quantities here are dimensionless (MODEL.md section 3); ``drill_sim.core.rig`` converts.
+All quantities here are dimensionless (model contract, section 3); ``drill_sim.core.rig``
+converts.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from .metrics import Metrics
 from .parameters import Groups, ParameterError, check_number
 from .stability import steady_state
 
-DEFAULT_DT = 5e-4            # [t*]; chosen from the convergence study (tests/test_convergence.py)
+DEFAULT_DT = 5e-4            # [t*]; halving it moves stationary metrics ~2e-5 (test_validation)
 MAX_NODES = 2**22            # surface memory cap: 32 MiB
 
 
@@ -33,7 +34,7 @@ def surface_nodes(groups: Groups, dt: float) -> int:
 
 @dataclass(frozen=True)
 class StateView:
-    """A copy of the instantaneous state, dimensionless, with MODEL.md's names."""
+    """A copy of the instantaneous state, dimensionless, with the model contract's names."""
 
     tau: float
     u: float
@@ -60,7 +61,7 @@ class StateView:
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Sampled outputs of a run (dimensionless), one array per MODEL.md quantity."""
+    """Sampled outputs of a run (dimensionless), one array per quantity of the model contract."""
 
     tau: np.ndarray
     u: np.ndarray
@@ -120,7 +121,7 @@ class Simulator:
 
     # ---- initial conditions -------------------------------------------------------------
     def start_steady(self, w0: float, omega0: float, perturbation: float = 0.0) -> None:
-        """The exact steady start of MODEL.md section 4; omega scaled by (1 + perturbation)."""
+        """The exact steady start (model contract, section 4); omega scaled by 1 + perturbation."""
         perturbation = check_number("perturbation", perturbation, low=-1.0)
         st = steady_state(self.groups, w0, omega0)
         self.set_commands(w0, omega0)
@@ -263,7 +264,8 @@ class Simulator:
 
     @property
     def stick_slip(self) -> bool:
-        """The flag of MODEL.md section 7: a stick phase within the last ``stick_window``."""
+        """The stick-slip flag (model contract, section 7): a stick within the last
+        ``stick_window``."""
         return bool(self._x[kn.X_SINCE_STICK] < self.stick_window)
 
     @property
@@ -283,5 +285,5 @@ class Simulator:
         self._acc[kn.A_OMEGA_MAX] = -math.inf
 
     def window_metrics(self) -> Metrics:
-        """Metrics of MODEL.md section 7 over the window since the last ``reset_window``."""
+        """Metrics (model contract, section 7) over the window since the last ``reset_window``."""
         return Metrics.from_accumulators(self._acc)

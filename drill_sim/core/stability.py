@@ -1,4 +1,5 @@
-"""Steady drilling (MODEL.md section 4) and the roots of its characteristic function (section 5).
+"""Steady drilling (model contract, section 4) and the roots of its characteristic function
+(section 5).
 
 Root finding: every root of Delta(s) with Re s >= re_min lies in the disc |s| <= R, with R from
 the bound |s|^4 <= |s|^2 (1 + (n psi + k) e_max) + n psi e_max, e_max = 1 + exp(-re_min tau_n0).
@@ -25,7 +26,7 @@ class NoSteadyDrilling(ValueError):
 
 @dataclass(frozen=True)
 class SteadyState:
-    """The trivial solution, dimensionless (MODEL.md section 4)."""
+    """The trivial solution, dimensionless (model contract, section 4)."""
 
     w0: float
     omega0: float
