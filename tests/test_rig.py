@@ -5,9 +5,10 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
-from drill_sim.core import ParameterError, Rig
+from drill_sim.core import Groups, ParameterError, Rig
 
 
 def test_si_steady_start_reads_the_steady_state(base):
@@ -85,3 +86,40 @@ def test_failed_steady_start_changes_nothing(base):
     with pytest.raises(NoSteadyDrilling):
         rig.start_steady(1.0, base.rig.submerged_weight_n - 10e3)     # 10 kN < friction weight
     assert (rig.sample(), rig.sim.commands) == before
+
+
+def _rig_in(base, regime: str) -> Rig:
+    """The base rig in stick-slip, or a rig of the base bit in the bouncing regime."""
+    if regime == "stick-slip":
+        rig = Rig(base.rig)
+        rig.start_steady(base.top_drive_speed_rad_s, base.hook_load_n, 1e-3)
+        return rig
+    params = base.rig.with_groups(Groups(4, 50.0, 2.0, 0.36))
+    rig = Rig(params)
+    sc = rig.scales
+    rig.start_steady(3.0 / sc.time_s, params.submerged_weight_n - 6.0 * sc.force_n, 1e-3)
+    return rig
+
+
+@pytest.mark.parametrize("regime", ["stick-slip", "bouncing"])
+def test_parameter_swap_that_keeps_the_physics_changes_nothing(base, regime):
+    """replace_parameters with the same values: the run goes on as if nothing happened (the
+    depth of cut is measured against the rock surface from before the current pass)."""
+    runs = []
+    for swap in (False, True):
+        rig = _rig_in(base, regime)
+        rig.advance(20.0)
+        samples = []
+        for i in range(300):                       # swaps at many points of the cycle
+            if swap and i % 10 == 0:
+                rig.replace_parameters(rig.params)
+            rig.advance_steps(97)
+            s = rig.sample()
+            samples.append((s.depth_of_cut_m, s.bit_speed_rad_s, s.rop_m_s, s.wob_n))
+        runs.append(np.array(samples))
+        if regime == "bouncing":
+            assert np.any(runs[-1][:, 0] < 0.0) and np.any(runs[-1][:, 1] == 0.0)
+        else:
+            assert np.any(runs[-1][:, 1] == 0.0)
+    scale = np.max(np.abs(runs[0]), axis=0)
+    assert np.max(np.abs(runs[1] - runs[0]) / scale) < 1e-9

@@ -156,26 +156,39 @@ class Simulator:
 
     def load_state(self, *, tau: float, steps: int, u: float, v: float, phi: float, omega: float,
                    phi_td: float, surface: np.ndarray, regime: int, since_stick: float,
-                   w: float = 0.0, t: float = 0.0, delta_n: float = 0.0, g: float = 0.0) -> None:
-        """Put the bit, string and rock in a given state (dimensionless); ``surface`` is S over
-        one sector at any even spacing and is resampled onto this simulator's nodes; w, t,
-        delta_n and g are what the last step's outputs read until the next step."""
+                   w: float = 0.0, t: float = 0.0, delta_n: float = 0.0, g: float = 0.0,
+                   surface_behind: float | None = None) -> None:
+        """Put the bit, string and rock in a given state (dimensionless).
+
+        ``surface`` is S over one sector at any even spacing (node 0 at the sector's start), as
+        ``surface`` reads it, and is resampled onto this simulator's nodes. The blades' current
+        pass has already cut the last node they passed (the node at or below phi); its value
+        from before the pass, which the next depth of cut is measured against, is
+        ``surface_behind`` (as ``surface_behind`` reads it; None: the given value, i.e. that
+        node was not cut by the current pass). w, t, delta_n and g are what the last step's
+        outputs read until the next step.
+        """
         values = np.array([tau, u, v, phi, omega, phi_td, since_stick], dtype=float)
         if not np.all(np.isfinite(values[:6])) or not np.all(np.isfinite(surface)):
             raise ParameterError("load_state: the state must be finite")
-        nodes = self._surf.size
         src = np.asarray(surface, dtype=float)
+        before = src.copy()               # the surface as the current pass found it
+        if surface_behind is not None:
+            before[math.floor(phi * src.size * self.groups.n / (2.0 * math.pi)) % src.size] = \
+                check_number("surface_behind", surface_behind, low=None)
+        nodes = self._surf.size
         x_src = np.arange(src.size + 1) / src.size
         x_dst = np.arange(nodes) / nodes
         self._surf[:] = np.interp(x_dst, x_src, np.append(src, src[0]))
         k_last = math.floor(phi * self._p[kn.P_INV_DTHETA])
+        k_node = k_last & (nodes - 1)
         x = self._x
         x[kn.X_TAU], x[kn.X_U], x[kn.X_V], x[kn.X_PHI], x[kn.X_OMEGA], x[kn.X_PHI_TD] = values[:6]
         x[kn.X_SINCE_STICK] = since_stick
         x[kn.X_HOLE] = float(self._surf.max())
         x[kn.X_TS] = phi_td - phi
         x[kn.X_W], x[kn.X_T], x[kn.X_DELTA], x[kn.X_G] = w, t, delta_n, g
-        x[kn.X_S_BEHIND] = self._surf[k_last & (nodes - 1)]
+        x[kn.X_S_BEHIND] = float(np.interp(x_dst[k_node], x_src, np.append(before, before[0])))
         self._k[:] = (k_last, regime, steps)
 
     # ---- commands -----------------------------------------------------------------------
@@ -275,8 +288,14 @@ class Simulator:
 
     @property
     def surface(self) -> np.ndarray:
-        """A copy of the rock surface S over one sector [L*]."""
+        """A copy of the rock surface S over one sector [L*], the current pass included."""
         return self._surf.copy()
+
+    @property
+    def surface_behind(self) -> float:
+        """S at the last node the blades passed, from before the current pass [L*]: what the
+        next depth of cut is measured against there (``load_state`` takes it back)."""
+        return float(self._x[kn.X_S_BEHIND])
 
     def reset_window(self) -> None:
         """Start a new metrics window now."""
