@@ -35,13 +35,15 @@ X_TS = 10           # string torque phi_td - phi at the end of the last step [C]
 X_DELTA = 11        # depth of cut per blade during the last step [L*]
 X_G = 12            # wear-flat contact factor during the last step [-]
 X_HOLE = 13         # deepest point of the rock surface, max of S [L*]
-NX = 14
+X_SUM_W, X_SUM_T = 14, 15   # sums of w and t over the steps since the last sample (an output
+NX = 16                     # row or a read of the sums); the window's A_W, A_T exclude them
 
 # integer state k
 K_LAST = 0          # absolute index of the last surface node the blades passed
 K_REGIME = 1        # REGIME_* of the last step
 K_STEPS = 2         # steps taken since the start
-NK = 3
+K_SAMPLED = 3       # K_STEPS at the last sample (X_SUM_* cover the steps since)
+NK = 4
 
 REGIME_ROTATING, REGIME_STUCK, REGIME_OFF_BOTTOM = 0, 1, 2
 
@@ -53,13 +55,14 @@ NP = 7
 C_W0, C_OMEGA0, C_V_MIN = 0, 1, 2   # C_V_MIN: lowest axial velocity (hoisting-speed limit)
 NC = 3
 
-# accumulators a, integrals over the metrics window
+# accumulators a, integrals over the metrics window (A_W, A_T up to the last sample: add
+# h X_SUM_W, h X_SUM_T for the window's integrals)
 (A_TIME, A_OMEGA, A_OMEGA_MIN, A_OMEGA_MAX, A_W, A_T, A_TS, A_V, A_STICK_TIME, A_BOUNCE_TIME,
  A_WORK_TOP_DRIVE, A_WORK_WEIGHT, A_WORK_HOIST, A_DISSIPATED_ROT, A_DISSIPATED_AX,
  A_W0, A_OMEGA0) = range(17)
 NA = 17
 
-# output columns
+# output columns (O_W, O_T: means over the steps since the previous sample or row)
 (O_TAU, O_U, O_V, O_PHI, O_OMEGA, O_PHI_TD, O_W, O_T, O_TS, O_DELTA, O_REGIME, O_W0, O_OMEGA0,
  O_G) = range(14)
 NO = 14
@@ -188,17 +191,17 @@ def _blade_height(theta, phi, dphi, u, u_new):
 @njit(cache=True, inline="always")
 def _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist):
     """The window integrals (forces act over the whole step); ``a`` is the tuple
-    (time, omega, w, t, ts, v, stick, bounce, work top drive, work weight, work hoist,
-    dissipated rotation, dissipated axial) and the updated tuple is returned."""
-    (a_time, a_om, a_w, a_t, a_ts, a_v, a_stick, a_bounce, a_wtd, a_ww, a_wh, a_drot,
-     a_dax) = a
+    (time, omega, ts, v, stick, bounce, work top drive, work weight, work hoist, dissipated
+    rotation, dissipated axial) and the updated tuple is returned. The integrals of w and t
+    are kept as the sample sums (X_SUM_W, X_SUM_T), folded in at each sample."""
+    a_time, a_om, a_ts, a_v, a_stick, a_bounce, a_wtd, a_ww, a_wh, a_drot, a_dax = a
     if regime == REGIME_STUCK:
         a_stick += h
     elif regime == REGIME_OFF_BOTTOM:
         a_bounce += h
-    return (a_time + h, a_om + h * om_bar, a_w + h * w, a_t + h * t, a_ts + h * ts,
-            a_v + h * v_bar, a_stick, a_bounce, a_wtd + h * ts * om0, a_ww + h * w0 * v_bar,
-            a_wh + h * f_hoist * v_bar, a_drot + h * t * om_bar, a_dax + h * w * v_bar)
+    return (a_time + h, a_om + h * om_bar, a_ts + h * ts, a_v + h * v_bar, a_stick, a_bounce,
+            a_wtd + h * ts * om0, a_ww + h * w0 * v_bar, a_wh + h * f_hoist * v_bar,
+            a_drot + h * t * om_bar, a_dax + h * w * v_bar)
 
 
 @njit(cache=True)
@@ -225,11 +228,13 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     tau, u, v, phi, om, ptd = x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD]
     s_behind, hole, since_stick = x[X_S_BEHIND], x[X_HOLE], x[X_SINCE_STICK]
     w, t, delta, g = x[X_W], x[X_T], x[X_DELTA], x[X_G]
-    k_last, regime, steps = k[K_LAST], k[K_REGIME], k[K_STEPS]
+    sum_w, sum_t = x[X_SUM_W], x[X_SUM_T]
+    k_last, regime, steps, sampled = k[K_LAST], k[K_REGIME], k[K_STEPS], k[K_SAMPLED]
     a_om_min, a_om_max = acc[A_OMEGA_MIN], acc[A_OMEGA_MAX]
-    a = (acc[A_TIME], acc[A_OMEGA], acc[A_W], acc[A_T], acc[A_TS], acc[A_V], acc[A_STICK_TIME],
-         acc[A_BOUNCE_TIME], acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST],
-         acc[A_DISSIPATED_ROT], acc[A_DISSIPATED_AX])
+    a_w, a_t = acc[A_W], acc[A_T]
+    a = (acc[A_TIME], acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME], acc[A_BOUNCE_TIME],
+         acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST], acc[A_DISSIPATED_ROT],
+         acc[A_DISSIPATED_AX])
 
     for _ in range(n_steps):
         # 1. half drift
@@ -266,6 +271,8 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             k_last = k_new
             s_behind = surf[k_new & mask]
         a = _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist)
+        sum_w += w              # what a sensor sees: forces averaged over its sample
+        sum_t += t              # (and, folded in at each sample, the window's integrals)
 
         u = u_new
         v = v_new
@@ -289,8 +296,8 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             out[out_row, O_PHI] = phi
             out[out_row, O_OMEGA] = om
             out[out_row, O_PHI_TD] = ptd
-            out[out_row, O_W] = w
-            out[out_row, O_T] = t
+            out[out_row, O_W] = sum_w / (steps - sampled)   # means over the row's interval
+            out[out_row, O_T] = sum_t / (steps - sampled)
             out[out_row, O_TS] = ptd - phi
             out[out_row, O_DELTA] = delta
             out[out_row, O_REGIME] = regime
@@ -298,14 +305,21 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             out[out_row, O_OMEGA0] = om0
             out[out_row, O_G] = g
             out_row += 1
+            a_w += h * sum_w
+            a_t += h * sum_t
+            sum_w = 0.0
+            sum_t = 0.0
+            sampled = steps
 
     x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD] = tau, u, v, phi, om, ptd
     x[X_S_BEHIND], x[X_HOLE], x[X_SINCE_STICK] = s_behind, hole, since_stick
     x[X_W], x[X_T], x[X_TS], x[X_DELTA], x[X_G] = w, t, ptd - phi, delta, g
-    k[K_LAST], k[K_REGIME], k[K_STEPS] = k_last, regime, steps
-    (acc[A_TIME], acc[A_OMEGA], acc[A_W], acc[A_T], acc[A_TS], acc[A_V], acc[A_STICK_TIME],
-     acc[A_BOUNCE_TIME], acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST],
-     acc[A_DISSIPATED_ROT], acc[A_DISSIPATED_AX]) = a
+    x[X_SUM_W], x[X_SUM_T] = sum_w, sum_t
+    k[K_LAST], k[K_REGIME], k[K_STEPS], k[K_SAMPLED] = k_last, regime, steps, sampled
+    acc[A_W], acc[A_T] = a_w, a_t
+    (acc[A_TIME], acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME], acc[A_BOUNCE_TIME],
+     acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST], acc[A_DISSIPATED_ROT],
+     acc[A_DISSIPATED_AX]) = a
     acc[A_OMEGA_MIN], acc[A_OMEGA_MAX] = a_om_min, a_om_max
     acc[A_W0] += n_steps * h * w0
     acc[A_OMEGA0] += n_steps * h * om0

@@ -43,7 +43,7 @@ class StateView:
     omega: float
     phi_td: float
     w: float          # weight on bit over the last step (stick reaction included)
-    t: float          # torque on bit over the last step
+    t: float          # torque on bit over the last step (a stick's reaction included)
     ts: float         # string (surface) torque phi_td - phi
     delta_n: float    # depth of cut per blade
     g: float          # wear-flat contact factor
@@ -61,7 +61,11 @@ class StateView:
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Sampled outputs of a run (dimensionless), one array per quantity of the model contract."""
+    """Sampled outputs of a run (dimensionless), one array per quantity of the model contract.
+
+    w and t are means over each row's output interval (impulses of sticks and landings spread
+    over the interval, as a sensor would see them); everything else is the value at the row.
+    """
 
     tau: np.ndarray
     u: np.ndarray
@@ -140,7 +144,7 @@ class Simulator:
         self._x[kn.X_T] = self._x[kn.X_TS] = st.t0
         self._x[kn.X_DELTA] = st.delta_n0
         self._x[kn.X_G] = 1.0
-        self._k[:] = (0, kn.REGIME_ROTATING, 0)
+        self._k[:] = (0, kn.REGIME_ROTATING, 0, 0)
         self.reset_window()
 
     def start_at_rest(self, gap: float = 0.0) -> None:
@@ -151,7 +155,7 @@ class Simulator:
         self._x[:] = 0.0
         self._x[kn.X_U] = -gap
         self._x[kn.X_SINCE_STICK] = math.inf
-        self._k[:] = (0, kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK, 0)
+        self._k[:] = (0, kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK, 0, 0)
         self.reset_window()
 
     def load_state(self, *, tau: float, steps: int, u: float, v: float, phi: float, omega: float,
@@ -166,11 +170,12 @@ class Simulator:
         from before the pass, which the next depth of cut is measured against, is
         ``surface_behind`` (as ``surface_behind`` reads it; None: the given value, i.e. that
         node was not cut by the current pass). w, t, delta_n and g are what the last step's
-        outputs read until the next step.
+        outputs read until the next step; the force sums of the next sample start from here.
         """
         values = np.array([tau, u, v, phi, omega, phi_td, since_stick], dtype=float)
         if not np.all(np.isfinite(values[:6])) or not np.all(np.isfinite(surface)):
             raise ParameterError("load_state: the state must be finite")
+        self.take_force_sums()            # the window keeps the steps before the load
         src = np.asarray(surface, dtype=float)
         before = src.copy()               # the surface as the current pass found it
         if surface_behind is not None:
@@ -189,7 +194,8 @@ class Simulator:
         x[kn.X_TS] = phi_td - phi
         x[kn.X_W], x[kn.X_T], x[kn.X_DELTA], x[kn.X_G] = w, t, delta_n, g
         x[kn.X_S_BEHIND] = float(np.interp(x_dst[k_node], x_src, np.append(before, before[0])))
-        self._k[:] = (k_last, regime, steps)
+        x[kn.X_SUM_W] = x[kn.X_SUM_T] = 0.0
+        self._k[:] = (k_last, regime, steps, steps)
 
     # ---- commands -----------------------------------------------------------------------
     def set_commands(self, w0: float, omega0: float) -> None:
@@ -215,9 +221,15 @@ class Simulator:
                    self._no_rows, 1, 0)
 
     def advance_into(self, n_steps: int, out: np.ndarray, every: int, row: int) -> int:
-        """Advance and write a row to ``out`` every ``every`` steps; return the next free row."""
+        """Advance and write a row to ``out`` at every step count that is a multiple of ``every``;
+        return the next free row. A row is a sample: its w and t are the means over the steps
+        since the previous sample (a row, ``take_force_sums``, ``start_sample``, a start)."""
         return int(kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
                               n_steps, out, every, row))
+
+    def start_sample(self) -> None:
+        """The next sample's (row's) w and t average over the steps from now on."""
+        self.take_force_sums()
 
     def run(self, duration: float, *, output_interval: float | None = None,
             schedule: Callable[[float], tuple[float, float]] | None = None,
@@ -226,7 +238,10 @@ class Simulator:
         """Advance by ``duration`` [t*] recording rows every ``output_interval`` [t*] (None: none).
 
         ``schedule(tau) -> (w0, omega0)`` is applied every ``schedule_interval`` [t*] (zero-order
-        hold); ``progress(fraction)`` is called between chunks.
+        hold); ``progress(fraction)`` is called between chunks. Each row's w and t are the means
+        over its output interval (the first row's: since the run started), as a sensor sampled
+        at that interval would report the impulse of a stick or a landing; with
+        ``output_interval = dt`` they are the per-step values. A run starts a new sample.
         """
         duration = check_number("duration", duration)
         n_total = round(duration / self.dt)
@@ -238,6 +253,7 @@ class Simulator:
         chunk = n_total if schedule is None else max(1, round(schedule_interval / self.dt))
         chunk = min(chunk, 2_000_000) if progress is not None else chunk
         row, done = 0, 0
+        self.start_sample()
         while done < n_total:
             if schedule is not None:
                 self.set_commands(*schedule(self.tau))
@@ -275,6 +291,18 @@ class Simulator:
                          ts=x[kn.X_TS], delta_n=x[kn.X_DELTA], g=x[kn.X_G],
                          regime=int(k[kn.K_REGIME]), since_stick=x[kn.X_SINCE_STICK])
 
+    def take_force_sums(self) -> tuple[float, float, int]:
+        """(sum of w, sum of t, steps) over the steps since the previous sample (a call, an
+        output row, a start or ``load_state``), and start the next: a sample's mean WOB and TOB
+        are the sums over the steps (see ``Rig.sample``)."""
+        x, k, acc, h = self._x, self._k, self._acc, self.dt
+        sums = (float(x[kn.X_SUM_W]), float(x[kn.X_SUM_T]), int(k[kn.K_STEPS] - k[kn.K_SAMPLED]))
+        acc[kn.A_W] += h * sums[0]              # the window's integrals take the sample in
+        acc[kn.A_T] += h * sums[1]
+        x[kn.X_SUM_W] = x[kn.X_SUM_T] = 0.0
+        k[kn.K_SAMPLED] = k[kn.K_STEPS]
+        return sums
+
     @property
     def stick_slip(self) -> bool:
         """The stick-slip flag (model contract, section 7): a stick within the last
@@ -302,7 +330,12 @@ class Simulator:
         self._acc[:] = 0.0
         self._acc[kn.A_OMEGA_MIN] = math.inf
         self._acc[kn.A_OMEGA_MAX] = -math.inf
+        self._acc[kn.A_W] = -self.dt * self._x[kn.X_SUM_W]   # the pending sample's steps are
+        self._acc[kn.A_T] = -self.dt * self._x[kn.X_SUM_T]   # before the window
 
     def window_metrics(self) -> Metrics:
         """Metrics (model contract, section 7) over the window since the last ``reset_window``."""
-        return Metrics.from_accumulators(self._acc)
+        acc = self._acc.copy()
+        acc[kn.A_W] += self.dt * self._x[kn.X_SUM_W]
+        acc[kn.A_T] += self.dt * self._x[kn.X_SUM_T]
+        return Metrics.from_accumulators(acc)
