@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 from . import kernel as kn
 from .parameters import ParameterError, RigParameters, check_number
-from .simulator import DEFAULT_DT, Simulator
+from .simulator import DEFAULT_DT, STEPS_PER_PERIOD, Simulator, fastest_period, max_step
 from .stability import SteadyState, steady_state
 
 RPM = 2.0 * math.pi / 60.0   # rad/s per rpm
@@ -49,6 +49,16 @@ class RigSample(NamedTuple):
     regime: int                    # the kernel's regime of the last step: REGIME_* below
 
 
+def _check_step(dt_s: float, params: RigParameters) -> None:
+    """Refuse a step that cannot resolve the fastest mode of these parameters, in SI."""
+    limit_s = max_step(params.groups) * params.scales.time_s
+    if dt_s > limit_s * (1.0 + 1e-12):
+        raise ParameterError(
+            f"dt_s = {dt_s:g} s cannot resolve the fastest mode of these parameters (period "
+            f"{fastest_period(params.groups) * params.scales.time_s:.4g} s): expected dt_s <= "
+            f"{limit_s:.4g} s, {STEPS_PER_PERIOD} steps a period")
+
+
 class Rig:
     """A drilling rig in SI: ``command`` it, ``advance_to`` a time, ``sample`` its outputs.
 
@@ -65,6 +75,7 @@ class Rig:
         self.groups = params.groups
         ts = self.scales.time_s
         dt = DEFAULT_DT if dt_s is None else check_number("dt_s", dt_s) / ts
+        _check_step(dt * ts, params)
         self.sim = Simulator(self.groups, dt)
         self.set_stick_window(4.0 * math.pi * ts if stick_window_s is None else stick_window_s)
         self.set_hoist_speed_limit(hoist_speed_limit_m_s)
@@ -103,6 +114,7 @@ class Rig:
             raise ParameterError(f"blade_count cannot change while running "
                                  f"({self.params.blade_count} -> {params.blade_count}): "
                                  "it changes the rock surface's sector; reset instead")
+        _check_step(self.dt_s, params)
         old, new = self.scales, params.scales
         s = self.sim.state()
         sum_w, sum_t, n = self.sim.take_force_sums()     # carried over in SI to the next sample
