@@ -4,11 +4,12 @@ their range. Each refusal is a ParameterError that says what would work."""
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import replace
 
 import pytest
 
-from drill_sim.core import Groups, ParameterError, Rig, Simulator
+from drill_sim.core import Groups, ParameterError, Rig, Simulator, stability
 from drill_sim.core.simulator import max_step
 
 STIFF = Groups(4, 1e4, 6.84, 0.36)          # axial period 2 pi/sqrt(4e4) = 0.031 t*
@@ -48,3 +49,37 @@ def test_the_rig_refuses_a_step_too_coarse_for_new_parameters(base):
     assert rig.params == base.rig and rig.sample() == before
     with pytest.raises(ParameterError, match="cannot resolve"):
         Rig(heavy, dt_s=2e-3)
+
+
+BASE = Groups(4, 13.73, 6.84, 0.36)
+
+
+@pytest.mark.parametrize("omega0", [1e-3, 1e-4, 1e-9])
+def test_stability_at_very_low_speed_is_refused_with_the_speed_that_works(omega0):
+    """Used to raise OverflowError (exp(-re_min tau_n0) with tau_n0 = 2 pi/(n omega0))."""
+    t0 = time.perf_counter()
+    with pytest.raises(ParameterError, match=r"too low for the root search.*omega0 >= 0.038"):
+        stability(BASE, 9.6, omega0)
+    assert time.perf_counter() - t0 < 1.0
+    with pytest.raises(ParameterError, match="re_min >="):        # just below: refused
+        stability(BASE, 9.6, 0.0379, re_min=-1e-3)
+    # 0.038 itself is accepted (searching it takes a few seconds: 137 roots, complete)
+
+
+def test_stability_box_too_wide_for_the_delay_is_refused_with_the_re_min_that_works():
+    """omega0 = 0.1 with the default re_min = -0.5 asked for ~2000 roots (24 s, incomplete)."""
+    with pytest.raises(ParameterError, match=r"use re_min >= -0.165"):
+        stability(BASE, 9.6, 0.1)
+    res = stability(BASE, 9.6, 0.1, re_min=-0.165)
+    assert res.complete and not res.stable
+    assert res.rightmost.real == pytest.approx(0.17697, abs=1e-5)
+
+
+@pytest.mark.parametrize("re_min", [-1000.0, -1e308, -6.6])
+def test_absurd_re_min_is_refused_at_once(re_min):
+    t0 = time.perf_counter()
+    with pytest.raises(ParameterError, match=r"use re_min >= -6.5"):
+        stability(BASE, 9.6, 1.32, re_min=re_min)
+    assert time.perf_counter() - t0 < 1.0
+    with pytest.raises(ParameterError, match="re_min"):
+        stability(BASE, 9.6, 1.32, re_min=-math.inf)
