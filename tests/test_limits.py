@@ -83,3 +83,24 @@ def test_absurd_re_min_is_refused_at_once(re_min):
     assert time.perf_counter() - t0 < 1.0
     with pytest.raises(ParameterError, match="re_min"):
         stability(BASE, 9.6, 1.32, re_min=-math.inf)
+
+
+def test_a_step_turning_the_bit_over_a_sector_is_refused_not_swept_wrongly():
+    """w0 = 1e5 winds the string up so far that the bit slips at ~1e5 / t*, 30 sectors a step
+    at the default dt: the sweep used to keep only the last sector's nodes, silently."""
+    sim = Simulator(BASE)
+    sim.start_steady(1e5, 1.32, 1e-3)
+    with pytest.raises(ParameterError, match="more than a sector"):
+        sim.run(20.0)
+    s = sim.state()
+    assert 0.0 < s.tau < 20.0 and sim.steps == round(s.tau / sim.dt)
+    assert math.isfinite(s.omega) and math.isfinite(s.u)
+    with pytest.raises(ParameterError, match="more than a sector"):
+        sim.advance(10)                                   # and again, not one step further
+    assert sim.state() == s
+    # w0 = 1e3 slips at ~900 / t*, 0.28 sector a step: accepted
+    ok = Simulator(BASE)
+    ok.start_steady(1e3, 1.32, 1e-3)
+    assert ok.run(20.0).metrics.stick_fraction > 0.5
+    with pytest.raises(ParameterError, match="omega0"):  # a command that would do it at once
+        ok.set_commands(10.0, 1.01 * 2 * math.pi / BASE.n / ok.dt)

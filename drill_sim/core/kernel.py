@@ -43,7 +43,8 @@ K_LAST = 0          # absolute index of the last surface node the blades passed
 K_REGIME = 1        # REGIME_* of the last step
 K_STEPS = 2         # steps taken since the start
 K_SAMPLED = 3       # K_STEPS at the last sample (X_SUM_* cover the steps since)
-NK = 4
+K_REFUSED = 4       # 1 if the last call stopped before a step turning the bit over a sector
+NK = 5
 
 REGIME_ROTATING, REGIME_STUCK, REGIME_OFF_BOTTOM = 0, 1, 2
 
@@ -209,6 +210,9 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     """Advance the state by ``n_steps`` fixed steps; return the next free row of ``out``.
 
     Every ``out_every`` global steps a row of outputs is written to ``out`` while rows remain.
+    A step that would turn the bit forward by more than a sector 2 pi/n is refused: the rock
+    surface cannot be swept (every node would be passed more than once) nor the depth of cut
+    measured; the call stops before it, state as after the previous step, K_REFUSED = 1.
     """
     n = p[P_N]
     lam = p[P_LAM]
@@ -224,12 +228,15 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     n_nodes = surf.shape[0]
     mask = n_nodes - 1
     rows = out.shape[0]
+    sector = n_nodes * dth
+    k[K_REFUSED] = 0
 
     tau, u, v, phi, om, ptd = x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD]
     s_behind, hole, since_stick = x[X_S_BEHIND], x[X_HOLE], x[X_SINCE_STICK]
     w, t, delta, g = x[X_W], x[X_T], x[X_DELTA], x[X_G]
     sum_w, sum_t = x[X_SUM_W], x[X_SUM_T]
     k_last, regime, steps, sampled = k[K_LAST], k[K_REGIME], k[K_STEPS], k[K_SAMPLED]
+    steps0 = steps
     a_om_min, a_om_max = acc[A_OMEGA_MIN], acc[A_OMEGA_MAX]
     a_w, a_t = acc[A_W], acc[A_T]
     a = (acc[A_TIME], acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME], acc[A_BOUNCE_TIME],
@@ -243,16 +250,20 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
         ptd_m = ptd + h2 * om0
         ts = ptd_m - phi_m
         # 2. depth of cut on the surface left by earlier passes
-        delta = u_m - _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
+        delta_new = u_m - _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
         # 3. set-valued laws, solved for the end-of-step velocities
-        regime, w, t, g, v_new, om_new = _bit_rock_law(delta, regime, v, om, ts, w0, n, lam,
-                                                       beta, h, hpsi)
+        regime_new, w_new, t_new, g_new, v_new, om_new = _bit_rock_law(
+            delta_new, regime, v, om, ts, w0, n, lam, beta, h, hpsi)
         v_new, f_hoist = _hoist_limit(v_new, v_min, hpsi)
         # 4. second half drift and the sweep of the blades over the rock
+        phi_new = phi_m + h2 * om_new
+        if phi_new - phi > sector:
+            k[K_REFUSED] = 1                    # more than a sector in one step: refused
+            break
+        regime, w, t, g, delta = regime_new, w_new, t_new, g_new, delta_new
         v_bar = 0.5 * (v + v_new)
         om_bar = 0.5 * (om + om_new)
         u_new = u_m + h2 * v_new
-        phi_new = phi_m + h2 * om_new
         # the blades sweep the rock: S <- max(S, u) at every node passed; backward rotation
         # (possible only off bottom) cuts nothing
         k_new = np.int64(math.floor(phi_new * inv_dth))
@@ -321,6 +332,6 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
      acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST], acc[A_DISSIPATED_ROT],
      acc[A_DISSIPATED_AX]) = a
     acc[A_OMEGA_MIN], acc[A_OMEGA_MAX] = a_om_min, a_om_max
-    acc[A_W0] += n_steps * h * w0
-    acc[A_OMEGA0] += n_steps * h * om0
+    acc[A_W0] += (steps - steps0) * h * w0
+    acc[A_OMEGA0] += (steps - steps0) * h * om0
     return out_row

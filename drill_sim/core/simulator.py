@@ -170,7 +170,7 @@ class Simulator:
         self._x[kn.X_T] = self._x[kn.X_TS] = st.t0
         self._x[kn.X_DELTA] = st.delta_n0
         self._x[kn.X_G] = 1.0
-        self._k[:] = (0, kn.REGIME_ROTATING, 0, 0)
+        self._k[:] = (0, kn.REGIME_ROTATING, 0, 0, 0)
         self.reset_window()
 
     def start_at_rest(self, gap: float = 0.0) -> None:
@@ -181,7 +181,7 @@ class Simulator:
         self._x[:] = 0.0
         self._x[kn.X_U] = -gap
         self._x[kn.X_SINCE_STICK] = math.inf
-        self._k[:] = (0, kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK, 0, 0)
+        self._k[:] = (0, kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK, 0, 0, 0)
         self.reset_window()
 
     def load_state(self, *, tau: float, steps: int, u: float, v: float, phi: float, omega: float,
@@ -221,13 +221,16 @@ class Simulator:
         x[kn.X_W], x[kn.X_T], x[kn.X_DELTA], x[kn.X_G] = w, t, delta_n, g
         x[kn.X_S_BEHIND] = float(np.interp(x_dst[k_node], x_src, np.append(before, before[0])))
         x[kn.X_SUM_W] = x[kn.X_SUM_T] = 0.0
-        self._k[:] = (k_last, regime, steps, steps)
+        self._k[:] = (k_last, regime, steps, steps, 0)
 
     # ---- commands -----------------------------------------------------------------------
     def set_commands(self, w0: float, omega0: float) -> None:
-        """Available weight w0 = W0/F* (any sign) and top-drive speed omega0 >= 0, held from now."""
+        """Available weight w0 = W0/F* (any sign) and top-drive speed omega0 >= 0, held from now.
+
+        A speed that would turn the bit more than a sector 2 pi/n in one step is refused."""
         w0 = check_number("w0", w0, low=None)
-        omega0 = check_number("omega0", omega0, low_inclusive=True)
+        omega0 = check_number("omega0", omega0, low_inclusive=True,
+                              high=2.0 * math.pi / self.groups.n / self.dt)
         self._c[kn.C_W0], self._c[kn.C_OMEGA0] = w0, omega0   # both valid, or neither set
 
     def set_hoist_speed_limit(self, limit: float) -> None:
@@ -242,16 +245,33 @@ class Simulator:
 
     # ---- stepping -----------------------------------------------------------------------
     def advance(self, n_steps: int) -> None:
-        """Advance ``n_steps`` steps with the commands held; allocation-free."""
+        """Advance ``n_steps`` steps with the commands held; allocation-free.
+
+        Raises ParameterError, the state left after the last step taken, before a step that
+        would turn the bit more than a sector (see ``kernel.advance``)."""
         kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc, n_steps,
                    self._no_rows, 1, 0)
+        if self._k[kn.K_REFUSED]:
+            self._refuse_step()
+
+    def _refuse_step(self) -> None:
+        sector = 2.0 * math.pi / self.groups.n
+        raise ParameterError(
+            f"at tau = {self.tau:.6g} the next step (dt = {self.dt:g}) would turn the bit more "
+            f"than a sector 2 pi/n = {sector:.4g} rad, from bit speed {self._x[kn.X_OMEGA]:.4g}: "
+            "the rock surface cannot be swept nor the depth of cut measured; use a smaller dt "
+            "or less weight on bit (the string winds up to about w0, and the bit slips at "
+            "about that speed); the state is kept at the last step")
 
     def advance_into(self, n_steps: int, out: np.ndarray, every: int, row: int) -> int:
         """Advance and write a row to ``out`` at every step count that is a multiple of ``every``;
         return the next free row. A row is a sample: its w and t are the means over the steps
         since the previous sample (a row, ``take_force_sums``, ``start_sample``, a start)."""
-        return int(kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
-                              n_steps, out, every, row))
+        row = int(kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
+                             n_steps, out, every, row))
+        if self._k[kn.K_REFUSED]:
+            self._refuse_step()
+        return row
 
     def start_sample(self) -> None:
         """The next sample's (row's) w and t average over the steps from now on."""
