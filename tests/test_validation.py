@@ -3,7 +3,6 @@ wrong if the physics or the numerics were. Run lengths are stated in units of t*
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
@@ -102,21 +101,66 @@ def test_stick_slip_only_if_beta_below_one(beta, sticks, base_commands):
         assert m.stick_fraction == 0.0 and m.min_bit_speed > 0.5
 
 
-def test_stick_fraction_falls_as_speed_rises(base_groups, base_commands):
-    """5a. Four top-drive speeds at 100 kN."""
-    w0 = base_commands[0]
-    fractions = [_stationary_metrics(base_groups, w0, om).window_metrics().stick_fraction
-                 for om in (0.8, 1.3, 2.0, 3.0)]
-    assert fractions[0] > 0.3
-    for a, b in itertools.pairwise(fractions):
-        assert b < a or a == b == 0.0, fractions
+TREND_SPEEDS = (0.5, 0.7, 1.0, 1.3, 1.7, 2.2, 3.0, 4.0)       # omega0, ~23 to 180 rpm on base
+TREND_WEIGHTS = (7.5, 8.5, 9.6, 11.0, 13.0, 15.0)             # w0, 78 to 156 kN on base
 
 
-def test_stick_fraction_grows_as_weight_rises(base_groups):
-    """5b. Four available weights at omega0 = 2.5 (about 115 rpm on the base rig)."""
-    fractions = [_stationary_metrics(base_groups, w0, 2.5).window_metrics().stick_fraction
-                 for w0 in (7.5, 8.5, 9.5, 11.0)]
-    assert np.all(np.diff(fractions) > 0), fractions
+def _rank_correlation(x, y) -> float:
+    """Spearman's rho (no ties expected)."""
+    def rank(a):
+        return np.argsort(np.argsort(np.asarray(a, dtype=float), kind="stable"))
+    return float(np.corrcoef(rank(x), rank(y))[0, 1])
+
+
+@pytest.fixture(scope="module")
+def stick_grid(base_groups):
+    """Stick fraction over weights x speeds: 200 t* of transient, a 300 t* window, dt = 1e-3."""
+    grid = np.empty((len(TREND_WEIGHTS), len(TREND_SPEEDS)))
+    for i, w0 in enumerate(TREND_WEIGHTS):
+        for j, omega0 in enumerate(TREND_SPEEDS):
+            sim = _stationary_metrics(base_groups, w0, omega0, transient=200.0, window=300.0,
+                                      dt=1e-3)
+            grid[i, j] = sim.window_metrics().stick_fraction
+    return grid
+
+
+def test_stick_fraction_falls_as_speed_rises(stick_grid):
+    """5a. Over the grid, at every weight with w0 - lambda >= 1.5: rank correlation with speed
+    <= -0.7, and the slowest speed sticks more than 0.4, the fastest less than 0.1. Not pointwise
+    monotonic: 0.34 at omega0 = 1.0 below 0.44 at 1.3 at 100 kN, and at w0 = 11, omega0 = 1.3 the
+    run settles on a limit cycle that never sticks (SSI 0.76) beside the stick-slip the
+    neighbouring points show (both exist: 4 digits of psi pick one or the other). Just above
+    the friction weight (w0 = 7.5, lambda = 6.84) stick-slip is weak (< 0.25), with no trend."""
+    for i, w0 in enumerate(TREND_WEIGHTS):
+        row = stick_grid[i]
+        if w0 < 8.0:
+            assert np.all(row < 0.25), row
+            continue
+        assert _rank_correlation(TREND_SPEEDS, row) <= -0.7, (w0, row)
+        assert row[0] > 0.4 and row[-1] < 0.1, (w0, row)
+
+
+def test_stick_fraction_grows_as_weight_rises(stick_grid):
+    """5b. Over the grid, at every speed: rank correlation with weight >= 0.6, and the heaviest
+    weight sticks more than the lightest. Not pointwise monotonic either (0.84 at w0 = 13 above
+    0.72 at 15, omega0 = 0.5)."""
+    for j, omega0 in enumerate(TREND_SPEEDS):
+        column = stick_grid[:, j]
+        assert _rank_correlation(TREND_WEIGHTS, column) >= 0.6, (omega0, column)
+        assert column[-1] > column[0], (omega0, column)
+
+
+def test_beta_above_one_can_still_stick_at_a_hard_contact():
+    """5c. A departure from the seed's 'stick-slip only if beta < 1', documented in
+    msg_docs/model.md: with beta = 5 on the base groups, contact kept throughout, a bit pressed
+    down (V > 0, g = 1) carries a wear-flat torque beta lambda = 34 above the string's ~30, so
+    it is braked to a stop: it sticks about half the time. At beta <= 3 it never sticks."""
+    for beta, sticks in ((3.0, False), (5.0, True)):
+        sim = _stationary_metrics(Groups(4, 13.73, 6.84, beta), 9.6, 1.32, transient=200.0,
+                                  window=300.0, dt=1e-3)
+        m = sim.window_metrics()
+        assert m.bounce_fraction == 0.0
+        assert (m.stick_fraction > 0.3) if sticks else (m.stick_fraction == 0.0)
 
 
 def test_power_balance(base_groups, base_commands):
