@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from drill_sim.core import Groups, Simulator, stability, steady_state
+from drill_sim.core.kernel import REGIME_STUCK
 
 
 def _stationary_metrics(groups, w0, omega0, transient=600.0, window=600.0, dt=None):
@@ -260,6 +261,57 @@ def test_bouncing_regime(capsys):
     m = sim.window_metrics()
     assert m.bounce_fraction > 0.05
     assert m.mean_rop > 0
+
+
+def test_a_bit_that_stops_turning_while_rising_keeps_rising(base_groups):
+    """8b. The one-way axial hold (model contract 2.2, a choice): the rock pushes but cannot
+    pull, so a bit stuck while moving up is not held: it coasts up against the weight with no
+    reaction (W = 0), and only once it comes back down is it stopped, where it then rests,
+    v^2/(2 psi w0) above where it stopped turning. A two-way hold would stop it at once."""
+    sim = Simulator(base_groups)
+    sim.start_steady(9.6, 1.32)
+    sim.advance(1000)
+    s = sim.state()
+    v_up, w0 = -1.0, 1.0
+    sim.load_state(tau=s.tau, steps=sim.steps, u=s.u, v=v_up, phi=s.phi, omega=0.0,
+                   phi_td=s.phi + 1.0, surface=sim.surface, surface_behind=sim.surface_behind,
+                   regime=REGIME_STUCK, since_stick=0.0)
+    sim.set_commands(w0, 0.0)                      # top drive stopped: the twist stays at 1
+    tr = sim.run(0.2, output_interval=sim.dt)
+    assert np.all(tr.stuck) and np.all(tr.omega == 0.0) and np.all(tr.delta_n > 0.0)
+    rising = tr.v < 0.0
+    assert 100 < np.count_nonzero(rising) < tr.v.size - 100
+    assert np.all(tr.w[rising] == 0.0)                              # no pull from the rock
+    assert np.allclose(np.diff(tr.v[rising]), sim.dt * base_groups.psi * w0)   # free coasting
+    assert np.all(tr.v[~rising] == 0.0) and np.all(tr.u[~rising] == tr.u[-1])  # then held
+    rise = s.u - tr.u[-1]
+    assert rise == pytest.approx(v_up**2 / (2 * base_groups.psi * w0), rel=0.02)
+
+
+def test_bouncing_statistics_are_stable_where_trajectories_are_not():
+    """8c. The bouncing regime is chaotic (a 1e-6 change of the start moves the stick fraction
+    by ~0.1), so it is tested by statistics over an ensemble of starts: stick 0.45-0.65, bounce
+    0.09-0.16, ~1 % of the stuck time spent rising under the one-way hold (W = 0 there), mean WOB
+    = w0, ROP > 0 in every member."""
+    g = Groups(4, 50.0, 2.0, 0.36)
+    sticks, bounces, rising_shares = [], [], []
+    for k in range(4):
+        sim = Simulator(g, 1e-3)
+        sim.start_steady(6.0, 3.0, 1e-3 * (1.0 + 1e-6 * k))
+        sim.run(100.0)
+        sim.reset_window()
+        tr = sim.run(300.0, output_interval=sim.dt)
+        m = tr.metrics
+        rising = tr.stuck & (tr.v < 0.0)
+        assert np.all(tr.w[rising] == 0.0)
+        assert m.mean_wob == pytest.approx(6.0, rel=1e-3) and m.mean_rop > 1.5
+        sticks.append(m.stick_fraction)
+        bounces.append(m.bounce_fraction)
+        rising_shares.append(np.count_nonzero(rising) / np.count_nonzero(tr.stuck))
+    assert np.ptp(sticks) > 0.01                    # the members do differ ...
+    assert 0.45 < np.mean(sticks) < 0.65 and np.all(np.array(sticks) > 0.4)   # ... not their
+    assert 0.09 < np.mean(bounces) < 0.16                                      # statistics
+    assert 0.003 < np.mean(rising_shares) < 0.03
 
 
 def test_tag_bottom_from_rest():
