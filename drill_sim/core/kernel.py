@@ -111,7 +111,8 @@ def _contact_law(v, hpsi, w0, nd, lam):
     v0 = v + hpsi * (w0 - nd)                    # branch g = 0 (v+ < 0)
     if v0 < 0.0:
         return 0.0, v0
-    g = v0 / (hpsi * lam) if lam > 0.0 else 0.0  # axial stick, g in [0, 1]
+    friction = hpsi * lam                        # axial stick, g in [0, 1] (v0 <= friction)
+    g = v0 / friction if friction > 0.0 else 0.0
     return g, 0.0
 
 
