@@ -213,8 +213,14 @@ def test_bit_dissipation_follows_the_bit_laws(base_groups, base_commands):
         return float(np.sum(h * torque * omega_bar))
 
     dissipated = tr.metrics.dissipated_rotation
-    assert expected(g.beta) == pytest.approx(dissipated, rel=1e-11)
-    assert np.allclose(tr.t[rotating], (nd + g.beta * (tr.w - nd))[rotating], rtol=1e-12)
+    # a step in which a law switches is taken in parts and its row reports the parts' mean
+    # forces: the law holds exactly on the other rows, and the sum is off by ~1e-8
+    previous_v = np.concatenate([[np.nan], tr.v[:-1]])
+    previous_stuck = np.concatenate([[True], tr.stuck[:-1]])
+    whole = rotating & ~previous_stuck & (np.sign(tr.v) == np.sign(previous_v))
+    assert np.count_nonzero(rotating & ~whole) < 0.01 * np.count_nonzero(rotating)
+    assert np.allclose(tr.t[whole], (nd + g.beta * (tr.w - nd))[whole], rtol=1e-12)
+    assert expected(g.beta) == pytest.approx(dissipated, rel=1e-7)
     # a torque law with beta off by 5 % would be seen (friction is ~1/4 of the torque)
     assert abs(expected(1.05 * g.beta) / dissipated - 1.0) > 1e-3
 
@@ -244,6 +250,38 @@ def test_convergence_in_dt(base_groups, base_commands, capsys):
         print(f"\n  observed order of convergence on a smooth transient: {order:.2f}; "
               f"stationary metric change on halving dt: {np.max(change):.2e}")
     assert order > 1.5
+
+
+def test_second_order_through_stick_phases(base_groups, base_commands, capsys):
+    """7b. Events located inside the step (the bit stops turning, breaks away, its wear flats
+    lift off or land) keep the scheme second order through them: end state (u, v, phi, Omega)
+    after 50 t* from a 1 % perturbation, three stick phases, against a 1.5e-5 t* step; slope
+    of log error against log dt over 14 steps from 4e-3 to 1e-4 t*. Unlocated: 1.7 here, 1.4
+    on rounded groups, with the errors scattered about the fit."""
+    w0, omega0 = base_commands
+    duration = 50.0
+
+    def end(n_steps: int) -> np.ndarray:
+        sim = Simulator(base_groups, duration / n_steps)
+        sim.start_steady(w0, omega0, 1e-2)
+        sim.advance(n_steps)
+        s = sim.state()
+        return np.array([s.u, s.v, s.phi, s.omega])
+
+    probe = Simulator(base_groups, 1e-3)
+    probe.start_steady(w0, omega0, 1e-2)
+    stuck = probe.run(duration, output_interval=1e-3).stuck
+    assert np.count_nonzero(np.diff(stuck.astype(int)) == 1) >= 3
+    counts = np.unique(np.round(np.geomspace(duration / 4e-3, duration / 1e-4, 14)).astype(int))
+    reference = end(round(duration / 1.5e-5))
+    errors = np.log([np.linalg.norm(end(c) - reference) for c in counts])
+    fit = np.polyfit(np.log(counts), errors, 1)
+    order, scatter = -fit[0], np.std(errors - np.polyval(fit, np.log(counts)))
+    with capsys.disabled():
+        print(f"\n  observed order through three stick phases: {order:.2f} "
+              f"(scatter about the fit: {scatter:.2f} in log error)")
+    assert order >= 1.8
+    assert scatter < 0.4          # unlocated, the errors scatter over a decade (0.97)
 
 
 def test_bouncing_regime(capsys):
@@ -303,7 +341,9 @@ def test_bouncing_statistics_are_stable_where_trajectories_are_not():
         tr = sim.run(300.0, output_interval=sim.dt)
         m = tr.metrics
         rising = tr.stuck & (tr.v < 0.0)
-        assert np.all(tr.w[rising] == 0.0)
+        held = rising & np.concatenate([[False], rising[:-1]])   # the whole step stuck, rising
+        assert np.count_nonzero(held) > 0.5 * np.count_nonzero(rising)
+        assert np.all(tr.w[held] == 0.0)
         assert m.mean_wob == pytest.approx(6.0, rel=1e-3) and m.mean_rop > 1.5
         sticks.append(m.stick_fraction)
         bounces.append(m.bounce_fraction)

@@ -1,22 +1,28 @@
 """The numba stepping kernel: fixed step, exact set-valued bit-rock laws, fixed memory.
 
-Scheme (a Moreau midpoint time-stepping scheme, second order in smooth phases):
+Scheme (a Moreau midpoint time-stepping scheme, second order in smooth phases and through the
+switches of the laws that it locates):
 
 1. drift half a step: u_m = u + h/2 v, phi_m = phi + h/2 omega, phi_td_m = phi_td + h/2 omega0;
 2. evaluate the depth of cut delta = u_m - S(phi_m) on the rock surface left by earlier passes
    (``_surface_at``);
 3. solve the set-valued laws of the model contract (section 2.2, msg_docs/model.md) *implicitly*
    for the end-of-step velocities (``_bit_rock_law``): the wear-flat factor g from the sign of v+
-   (``_contact_law``), stick from the sign of omega+ and the breakaway torque (``_stick_holds``),
-   the rock reaction from the sign of v+ while stuck (``_stick_reaction``); each is a
-   one-dimensional complementarity problem solved exactly by trying its branches, so no law is
-   ever regularised; then the drawworks' hoisting-speed limit (``_hoist_limit``);
+   (``_contact_law``), stick from the sign of omega+ and the breakaway torque
+   (``_breakaway_torque``), the rock reaction from the sign of v+ while stuck
+   (``_stick_reaction``); each is a one-dimensional complementarity problem solved exactly by
+   trying its branches, so no law is ever regularised; then the drawworks' hoisting-speed limit
+   (``_hoist_limit``). If a law switches inside the step (the bit stops turning, breaks away,
+   its wear flats lift off or land), ``_bit_rock_law`` says where, and the step is taken in
+   parts split there (``_located_step``); a loss of contact or a landing is not located;
 4. drift the second half with the new velocities and let the blades sweep the surface:
-   S(theta) <- max(S(theta), u) at every grid node passed (``_sweep_surface``); add the step to
-   the window integrals (``_accumulate``).
+   S(theta) <- max(S(theta), u) at every grid node passed (``_first_swept_node``,
+   ``_blade_height``); add the step to the window integrals (``_accumulate``).
 
 The surface is an array of N = 2^m nodes over one sector 2*pi/n, linear between nodes. All state
 lives in preallocated arrays indexed by the constants below, so advancing allocates nothing.
+Helpers that take an array stay few: inlined into the loop, each costs reference counting per
+step, so the array reads and writes of the hot loop are written in ``advance`` itself.
 """
 
 from __future__ import annotations
@@ -47,6 +53,9 @@ K_REFUSED = 4       # 1 if the last call stopped before a step turning the bit o
 NK = 5
 
 REGIME_ROTATING, REGIME_STUCK, REGIME_OFF_BOTTOM = 0, 1, 2
+
+EVENT_MARGIN = 1e-9     # a switch closer than this (fraction of the step) to its ends is not split
+MAX_SPLITS = 2          # switches located per step
 
 # parameters p
 P_N, P_PSI, P_LAM, P_BETA, P_H, P_DTHETA, P_INV_DTHETA = range(7)
@@ -85,35 +94,34 @@ def _surface_at(surf, mask, phi, inv_dtheta, k_last, s_behind):
 
 
 @njit(cache=True, inline="always")
-def _stick_holds(ts, v, hpsi, w0, nd, beta_lam):
+def _breakaway_torque(v, hpsi, w0, nd, beta_lam):
     """The stick law: a stuck bit stays stuck while T_s <= T_max.
 
     T_max = n delta + beta lambda (cutting plus fully mobilised wear-flat friction) while the
     bit is pressed on the rock; n delta alone when it would lift off (friction lost).
     """
     if v + hpsi * w0 >= 0.0:
-        t_max = nd + beta_lam
-    else:
-        t_max = nd
-    return ts <= t_max
+        return nd + beta_lam
+    return nd
 
 
 @njit(cache=True, inline="always")
 def _contact_law(v, hpsi, w0, nd, lam):
-    """Cutting plus wear-flat contact with the complementarity on g; returns (g, v+).
+    """Cutting plus wear-flat contact with the complementarity on g; returns (g, v+, and v+ of
+    the branches g = 1 and g = 0).
 
     g = 1 if v+ > 0, g = 0 if v+ < 0, and g in [0, 1] keeping v+ = 0 (an axial stick): each
     branch is tried in turn on the implicit axial update v+ = v + h psi (w0 - n delta - lam g).
     """
     v1 = v + hpsi * (w0 - nd - lam)              # branch g = 1 (v+ > 0)
     if v1 > 0.0:
-        return 1.0, v1
+        return 1.0, v1, v1, v1 + hpsi * lam
     v0 = v + hpsi * (w0 - nd)                    # branch g = 0 (v+ < 0)
     if v0 < 0.0:
-        return 0.0, v0
+        return 0.0, v0, v1, v0
     friction = hpsi * lam                        # axial stick, g in [0, 1] (v0 <= friction)
     g = v0 / friction if friction > 0.0 else 0.0
-    return g, 0.0
+    return g, 0.0, v1, v0
 
 
 @njit(cache=True, inline="always")
@@ -131,13 +139,29 @@ def _stick_reaction(v, om, ts, w0, h, hpsi):
 
 
 @njit(cache=True, inline="always")
-def _bit_rock_law(delta, regime, v, om, ts, w0, n, lam, beta, h, hpsi):
-    """The set-valued bit-rock laws for one step; returns (regime, w, t, g, v+, omega+).
+def _crossing(earliest, start, end):
+    """The earlier of ``earliest`` and where a switching function linear over the step crosses
+    0 from ``start`` to ``end``, as fractions of the step (any value >= 1: no crossing)."""
+    if start != end:
+        at = start / (start - end)
+        if at < earliest:
+            return at
+    return earliest
+
+
+@njit(cache=True, inline="always")
+def _bit_rock_law(delta, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi):
+    """The set-valued bit-rock laws for one step; returns (regime, w, t, g, v+, omega+, event).
 
     Off bottom (delta < 0) nothing acts; in contact a stuck bit stays stuck while the stick law
     holds, otherwise the contact law gives g and v+, and a bit that would turn backwards is
-    stuck instead (no backward rotation in contact).
+    stuck instead (no backward rotation in contact). ``event`` locates the first switch of a
+    law inside the step, as a fraction of it (>= 1: none): the bit stops turning (omega
+    crosses 0), breaks away (T_s crosses T_max, T_s rising at omega0 while stuck), or its wear
+    flats engage or lift off (V crosses 0). The laws are linear between switches, so the
+    crossing of each switching function is interpolated linearly over the step.
     """
+    event = 2.0
     if delta < 0.0:
         regime = REGIME_OFF_BOTTOM
         w = 0.0
@@ -147,21 +171,33 @@ def _bit_rock_law(delta, regime, v, om, ts, w0, n, lam, beta, h, hpsi):
         om_new = om + h * ts
     else:
         nd = n * delta
-        stuck = regime == REGIME_STUCK and _stick_holds(ts, v, hpsi, w0, nd, beta * lam)
+        stuck = False
+        if regime == REGIME_STUCK:
+            t_max = _breakaway_torque(v, hpsi, w0, nd, beta * lam)
+            stuck = ts <= t_max
+            rise = h * om0                       # T_s over the step, the bit held
+            if ts + 0.5 * rise > t_max and rise > 0.0:
+                event = _crossing(event, t_max - (ts - 0.5 * rise), t_max - (ts + 0.5 * rise))
         if not stuck:
-            g, v_new = _contact_law(v, hpsi, w0, nd, lam)
+            g, v_new, v1, v0 = _contact_law(v, hpsi, w0, nd, lam)
+            if v > 0.0 and g < 1.0:              # the wear flats lift off
+                event = _crossing(event, v, v1)
+            elif v < 0.0 and g > 0.0:            # the wear flats land
+                event = _crossing(event, v, v0)
             w = nd + lam * g
             t = nd + beta * lam * g
             om_new = om + h * (ts - t)
             if om_new > 0.0:
                 regime = REGIME_ROTATING
             else:
+                if regime == REGIME_ROTATING and om > 0.0:
+                    event = _crossing(event, om, om_new)        # the bit stops turning
                 stuck = True
         if stuck:
             regime = REGIME_STUCK
             om_new = 0.0
             v_new, w, t, g = _stick_reaction(v, om, ts, w0, h, hpsi)
-    return regime, w, t, g, v_new, om_new
+    return regime, w, t, g, v_new, om_new, event
 
 
 @njit(cache=True, inline="always")
@@ -206,14 +242,119 @@ def _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist):
             a_drot + h * t * om_bar, a_dax + h * w * v_bar)
 
 
+@njit(cache=True, inline="always")
+def _load(x, k, acc):
+    """The state arrays as the stepper's locals."""
+    return (x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD], x[X_S_BEHIND],
+            x[X_HOLE], x[X_SINCE_STICK], x[X_W], x[X_T], x[X_DELTA], x[X_G], x[X_SUM_W],
+            x[X_SUM_T], k[K_LAST], k[K_REGIME], acc[A_OMEGA_MIN], acc[A_OMEGA_MAX],
+            (acc[A_TIME], acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME],
+             acc[A_BOUNCE_TIME], acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST],
+             acc[A_DISSIPATED_ROT], acc[A_DISSIPATED_AX]))
+
+
+@njit(cache=True, inline="always")
+def _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
+           sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a):
+    """The stepper's locals back into the state arrays (inverse of ``_load``)."""
+    x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD] = tau, u, v, phi, om, ptd
+    x[X_S_BEHIND], x[X_HOLE], x[X_SINCE_STICK] = s_behind, hole, since_stick
+    x[X_W], x[X_T], x[X_TS], x[X_DELTA], x[X_G] = w, t, ptd - phi, delta, g
+    x[X_SUM_W], x[X_SUM_T] = sum_w, sum_t
+    k[K_LAST], k[K_REGIME] = k_last, regime
+    acc[A_OMEGA_MIN], acc[A_OMEGA_MAX] = a_om_min, a_om_max
+    (acc[A_TIME], acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME], acc[A_BOUNCE_TIME],
+     acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST], acc[A_DISSIPATED_ROT],
+     acc[A_DISSIPATED_AX]) = a
+
+
+@njit(cache=True)
+def _located_step(x, k, surf, p, c, acc, event):
+    """One step taken in parts split where a law switches, from the state arrays and back.
+
+    ``event`` is where the first switch falls, as a fraction of the step (``_bit_rock_law``):
+    the step is taken up to it, then on from it, each part with the same midpoint scheme, so
+    the laws stay linear within each part and the scheme keeps its second order through the
+    switch; a further switch inside a part is located too, up to MAX_SPLITS in all. Only the
+    steps holding a switch come here (a few per stick-slip cycle), so ``advance`` keeps its
+    plain loop for the others. A part that would turn the bit over a sector sets K_REFUSED and
+    stops, the parts before it taken.
+    """
+    n, lam, beta, h, psi = p[P_N], p[P_LAM], p[P_BETA], p[P_H], p[P_PSI]
+    inv_dth, dth = p[P_INV_DTHETA], p[P_DTHETA]
+    w0, om0, v_min = c[C_W0], c[C_OMEGA0], c[C_V_MIN]
+    n_nodes = surf.shape[0]
+    mask = n_nodes - 1
+    sector = n_nodes * dth
+    (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t, k_last,
+     regime, a_om_min, a_om_max, a) = _load(x, k, acc)
+    hs = event * h
+    left = h
+    splits = 1
+    while True:
+        h2 = 0.5 * hs
+        hpsi = hs * psi
+        u_m = u + h2 * v
+        phi_m = phi + h2 * om
+        ptd_m = ptd + h2 * om0
+        ts = ptd_m - phi_m
+        delta_new = u_m - _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
+        regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
+            delta_new, regime, v, om, ts, w0, om0, n, lam, beta, hs, hpsi)
+        if splits < MAX_SPLITS and EVENT_MARGIN < event < 1.0 - EVENT_MARGIN:
+            splits += 1
+            hs *= event
+            continue
+        v_new, f_hoist = _hoist_limit(v_new, v_min, hpsi)
+        phi_new = phi_m + h2 * om_new
+        if phi_new - phi > sector:
+            k[K_REFUSED] = 1
+            break
+        regime, w, t, g, delta = regime_new, w_new, t_new, g_new, delta_new
+        u_new = u_m + h2 * v_new
+        k_new = np.int64(math.floor(phi_new * inv_dth))
+        if k_new > k_last:
+            dphi = phi_new - phi
+            for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
+                uc = _blade_height(kk * dth, phi, dphi, u, u_new)
+                j = kk & mask
+                s_behind = surf[j]
+                if uc > s_behind:
+                    surf[j] = uc
+                    if uc > hole:
+                        hole = uc
+            k_last = k_new
+        elif k_new < k_last:
+            k_last = k_new
+            s_behind = surf[k_new & mask]
+        a = _accumulate(a, hs, regime, 0.5 * (om + om_new), 0.5 * (v + v_new), w, t, ts, w0,
+                        om0, f_hoist)
+        sum_w += w * (hs / h)
+        sum_t += t * (hs / h)
+        u, v, phi, om, ptd = u_new, v_new, phi_new, om_new, ptd_m + h2 * om0
+        tau += hs
+        if om < a_om_min:
+            a_om_min = om
+        if om > a_om_max:
+            a_om_max = om
+        since_stick = 0.0 if regime == REGIME_STUCK else since_stick + hs
+        left -= hs
+        if left <= 0.0:
+            break
+        hs = left
+    _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
+           sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
+
+
 @njit(cache=True)
 def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     """Advance the state by ``n_steps`` fixed steps; return the next free row of ``out``.
 
     Every ``out_every`` global steps a row of outputs is written to ``out`` while rows remain.
-    A step that would turn the bit forward by more than a sector 2 pi/n is refused: the rock
-    surface cannot be swept (every node would be passed more than once) nor the depth of cut
-    measured; the call stops before it, state as after the previous step, K_REFUSED = 1.
+    A step in which a law switches is taken in parts by ``_located_step``. A step that would
+    turn the bit forward by more than a sector 2 pi/n is refused: the rock surface cannot be
+    swept (every node would be passed more than once) nor the depth of cut measured; the call
+    stops before it, state as after the previous step, K_REFUSED = 1.
     """
     n = p[P_N]
     lam = p[P_LAM]
@@ -232,17 +373,11 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     sector = n_nodes * dth
     k[K_REFUSED] = 0
 
-    tau, u, v, phi, om, ptd = x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD]
-    s_behind, hole, since_stick = x[X_S_BEHIND], x[X_HOLE], x[X_SINCE_STICK]
-    w, t, delta, g = x[X_W], x[X_T], x[X_DELTA], x[X_G]
-    sum_w, sum_t = x[X_SUM_W], x[X_SUM_T]
-    k_last, regime, steps, sampled = k[K_LAST], k[K_REGIME], k[K_STEPS], k[K_SAMPLED]
+    (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t, k_last,
+     regime, a_om_min, a_om_max, a) = _load(x, k, acc)
+    steps, sampled = k[K_STEPS], k[K_SAMPLED]
     steps0 = steps
-    a_om_min, a_om_max = acc[A_OMEGA_MIN], acc[A_OMEGA_MAX]
     a_w, a_t = acc[A_W], acc[A_T]
-    a = (acc[A_TIME], acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME], acc[A_BOUNCE_TIME],
-         acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST], acc[A_DISSIPATED_ROT],
-         acc[A_DISSIPATED_AX])
 
     for _ in range(n_steps):
         # 1. half drift
@@ -253,54 +388,64 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
         # 2. depth of cut on the surface left by earlier passes
         delta_new = u_m - _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
         # 3. set-valued laws, solved for the end-of-step velocities
-        regime_new, w_new, t_new, g_new, v_new, om_new = _bit_rock_law(
-            delta_new, regime, v, om, ts, w0, n, lam, beta, h, hpsi)
-        v_new, f_hoist = _hoist_limit(v_new, v_min, hpsi)
-        # 4. second half drift and the sweep of the blades over the rock
-        phi_new = phi_m + h2 * om_new
-        if phi_new - phi > sector:
-            k[K_REFUSED] = 1                    # more than a sector in one step: refused
-            break
-        regime, w, t, g, delta = regime_new, w_new, t_new, g_new, delta_new
-        v_bar = 0.5 * (v + v_new)
-        om_bar = 0.5 * (om + om_new)
-        u_new = u_m + h2 * v_new
-        # the blades sweep the rock: S <- max(S, u) at every node passed; backward rotation
-        # (possible only off bottom) cuts nothing
-        k_new = np.int64(math.floor(phi_new * inv_dth))
-        if k_new > k_last:
-            dphi = phi_new - phi
-            for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
-                uc = _blade_height(kk * dth, phi, dphi, u, u_new)
-                j = kk & mask
-                s_behind = surf[j]             # the node's value before this pass
-                if uc > s_behind:
-                    surf[j] = uc
-                    if uc > hole:
-                        hole = uc
-            k_last = k_new
-        elif k_new < k_last:
-            k_last = k_new
-            s_behind = surf[k_new & mask]
-        a = _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist)
-        sum_w += w              # what a sensor sees: forces averaged over its sample
-        sum_t += t              # (and, folded in at each sample, the window's integrals)
-
-        u = u_new
-        v = v_new
-        phi = phi_new
-        om = om_new
-        ptd = ptd_m + h2 * om0
-        tau += h
-        steps += 1
-        if om < a_om_min:
-            a_om_min = om
-        if om > a_om_max:
-            a_om_max = om
-        if regime == REGIME_STUCK:
-            since_stick = 0.0
+        regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
+            delta_new, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi)
+        if EVENT_MARGIN < event < 1.0 - EVENT_MARGIN:
+            # a law switches inside the step: take it in parts (rare)
+            _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta,
+                   g, sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
+            _located_step(x, k, surf, p, c, acc, event)
+            (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t,
+             k_last, regime, a_om_min, a_om_max, a) = _load(x, k, acc)
+            if k[K_REFUSED]:
+                break
         else:
-            since_stick += h
+            v_new, f_hoist = _hoist_limit(v_new, v_min, hpsi)
+            # 4. second half drift and the sweep of the blades over the rock
+            phi_new = phi_m + h2 * om_new
+            if phi_new - phi > sector:
+                k[K_REFUSED] = 1                    # more than a sector in one step: refused
+                break
+            regime, w, t, g, delta = regime_new, w_new, t_new, g_new, delta_new
+            v_bar = 0.5 * (v + v_new)
+            om_bar = 0.5 * (om + om_new)
+            u_new = u_m + h2 * v_new
+            # the blades sweep the rock: S <- max(S, u) at every node passed; backward
+            # rotation (possible only off bottom) cuts nothing
+            k_new = np.int64(math.floor(phi_new * inv_dth))
+            if k_new > k_last:
+                dphi = phi_new - phi
+                for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
+                    uc = _blade_height(kk * dth, phi, dphi, u, u_new)
+                    j = kk & mask
+                    s_behind = surf[j]             # the node's value before this pass
+                    if uc > s_behind:
+                        surf[j] = uc
+                        if uc > hole:
+                            hole = uc
+                k_last = k_new
+            elif k_new < k_last:
+                k_last = k_new
+                s_behind = surf[k_new & mask]
+            a = _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist)
+            sum_w += w              # what a sensor sees: forces averaged over its sample
+            sum_t += t              # (and, folded in at each sample, the window's integrals)
+
+            u = u_new
+            v = v_new
+            phi = phi_new
+            om = om_new
+            ptd = ptd_m + h2 * om0
+            tau += h
+            if om < a_om_min:
+                a_om_min = om
+            if om > a_om_max:
+                a_om_max = om
+            if regime == REGIME_STUCK:
+                since_stick = 0.0
+            else:
+                since_stick += h
+        steps += 1
         if out_row < rows and steps % out_every == 0:
             out[out_row, O_TAU] = tau
             out[out_row, O_U] = u
@@ -323,16 +468,10 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             sum_t = 0.0
             sampled = steps
 
-    x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD] = tau, u, v, phi, om, ptd
-    x[X_S_BEHIND], x[X_HOLE], x[X_SINCE_STICK] = s_behind, hole, since_stick
-    x[X_W], x[X_T], x[X_TS], x[X_DELTA], x[X_G] = w, t, ptd - phi, delta, g
-    x[X_SUM_W], x[X_SUM_T] = sum_w, sum_t
-    k[K_LAST], k[K_REGIME], k[K_STEPS], k[K_SAMPLED] = k_last, regime, steps, sampled
+    _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
+           sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
+    k[K_STEPS], k[K_SAMPLED] = steps, sampled
     acc[A_W], acc[A_T] = a_w, a_t
-    (acc[A_TIME], acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME], acc[A_BOUNCE_TIME],
-     acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST], acc[A_DISSIPATED_ROT],
-     acc[A_DISSIPATED_AX]) = a
-    acc[A_OMEGA_MIN], acc[A_OMEGA_MAX] = a_om_min, a_om_max
     acc[A_W0] += (steps - steps0) * h * w0
     acc[A_OMEGA0] += (steps - steps0) * h * om0
     return out_row
