@@ -13,8 +13,8 @@ switches of the laws that it locates):
    (``_stick_reaction``); each is a one-dimensional complementarity problem solved exactly by
    trying its branches, so no law is ever regularised; then the drawworks' hoisting-speed limit
    (``_hoist_limit``). If a law switches inside the step (the bit stops turning, breaks away,
-   its wear flats lift off or land), ``_bit_rock_law`` says where, and the step is taken in
-   parts split there (``_located_step``); a loss of contact or a landing is not located;
+   its wear flats lift off or land, it leaves the rock or lands), ``_bit_rock_law`` says where,
+   and the step is taken in parts split there (``_located_step``);
 4. drift the second half with the new velocities and let the blades sweep the surface:
    S(theta) <- max(S(theta), u) at every grid node passed (``_first_swept_node``,
    ``_blade_height``); add the step to the window integrals (``_accumulate``).
@@ -80,7 +80,7 @@ NO = 14
 
 @njit(cache=True, inline="always")
 def _surface_at(surf, mask, phi, inv_dtheta, k_last, s_behind):
-    """The rock surface S(phi) before the current pass, linear between nodes."""
+    """The rock surface S(phi) before the current pass, linear between nodes, and its slope."""
     pos = phi * inv_dtheta
     km = math.floor(pos)
     frac = pos - km
@@ -90,7 +90,7 @@ def _surface_at(surf, mask, phi, inv_dtheta, k_last, s_behind):
     else:
         s0 = surf[k0 & mask]
     s1 = surf[(k0 + 1) & mask]
-    return s0 + frac * (s1 - s0)
+    return s0 + frac * (s1 - s0), (s1 - s0) * inv_dtheta
 
 
 @njit(cache=True, inline="always")
@@ -150,16 +150,17 @@ def _crossing(earliest, start, end):
 
 
 @njit(cache=True, inline="always")
-def _bit_rock_law(delta, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi):
+def _bit_rock_law(delta, slope, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi):
     """The set-valued bit-rock laws for one step; returns (regime, w, t, g, v+, omega+, event).
 
     Off bottom (delta < 0) nothing acts; in contact a stuck bit stays stuck while the stick law
     holds, otherwise the contact law gives g and v+, and a bit that would turn backwards is
     stuck instead (no backward rotation in contact). ``event`` locates the first switch of a
     law inside the step, as a fraction of it (>= 1: none): the bit stops turning (omega
-    crosses 0), breaks away (T_s crosses T_max, T_s rising at omega0 while stuck), or its wear
-    flats engage or lift off (V crosses 0). The laws are linear between switches, so the
-    crossing of each switching function is interpolated linearly over the step.
+    crosses 0), breaks away (T_s crosses T_max, T_s rising at omega0 while stuck), its wear
+    flats engage or lift off (V crosses 0), or it lands or leaves the rock (delta crosses 0,
+    delta at the step's ends from its rate V - S' omega, S' the surface's ``slope``). The laws
+    are linear between switches, so each crossing is interpolated linearly over the step.
     """
     event = 2.0
     if delta < 0.0:
@@ -197,6 +198,10 @@ def _bit_rock_law(delta, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi):
             regime = REGIME_STUCK
             om_new = 0.0
             v_new, w, t, g = _stick_reaction(v, om, ts, w0, h, hpsi)
+    delta_start = delta - 0.5 * h * (v - slope * om)      # the bit lands or leaves the rock
+    delta_end = delta + 0.5 * h * (v_new - slope * om_new)
+    if (delta_start < 0.0) != (delta_end < 0.0):
+        event = _crossing(event, delta_start, delta_end)
     return regime, w, t, g, v_new, om_new, event
 
 
@@ -298,9 +303,10 @@ def _located_step(x, k, surf, p, c, acc, event):
         phi_m = phi + h2 * om
         ptd_m = ptd + h2 * om0
         ts = ptd_m - phi_m
-        delta_new = u_m - _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
+        s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
+        delta_new = u_m - s_m
         regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
-            delta_new, regime, v, om, ts, w0, om0, n, lam, beta, hs, hpsi)
+            delta_new, slope, regime, v, om, ts, w0, om0, n, lam, beta, hs, hpsi)
         if splits < MAX_SPLITS and EVENT_MARGIN < event < 1.0 - EVENT_MARGIN:
             splits += 1
             hs *= event
@@ -386,10 +392,11 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
         ptd_m = ptd + h2 * om0
         ts = ptd_m - phi_m
         # 2. depth of cut on the surface left by earlier passes
-        delta_new = u_m - _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
+        s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
+        delta_new = u_m - s_m
         # 3. set-valued laws, solved for the end-of-step velocities
         regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
-            delta_new, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi)
+            delta_new, slope, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi)
         if EVENT_MARGIN < event < 1.0 - EVENT_MARGIN:
             # a law switches inside the step: take it in parts (rare)
             _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta,
