@@ -233,17 +233,18 @@ def _blade_height(theta, phi, dphi, u, u_new):
 
 @njit(cache=True, inline="always")
 def _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist):
-    """The window integrals (forces act over the whole step); ``a`` is the tuple
-    (time, omega, ts, v, stick, bounce, work top drive, work weight, work hoist, dissipated
-    rotation, dissipated axial) and the updated tuple is returned. The integrals of w and t
-    are kept as the sample sums (X_SUM_W, X_SUM_T), folded in at each sample."""
-    a_time, a_om, a_ts, a_v, a_stick, a_bounce, a_wtd, a_ww, a_wh, a_drot, a_dax = a
+    """The window integrals (forces act over the whole step); ``a`` is the tuple (omega, ts,
+    v, stick, bounce, work hoist, dissipated rotation, dissipated axial) and the updated tuple
+    is returned. The integrals of w and t are kept as the sample sums (X_SUM_W, X_SUM_T),
+    folded in at each sample; time and the work of the held commands (omega0 ts, w0 v) are
+    added once a call, in ``advance``."""
+    a_om, a_ts, a_v, a_stick, a_bounce, a_wh, a_drot, a_dax = a
     if regime == REGIME_STUCK:
         a_stick += h
     elif regime == REGIME_OFF_BOTTOM:
         a_bounce += h
-    return (a_time + h, a_om + h * om_bar, a_ts + h * ts, a_v + h * v_bar, a_stick, a_bounce,
-            a_wtd + h * ts * om0, a_ww + h * w0 * v_bar, a_wh + h * f_hoist * v_bar,
+    return (a_om + h * om_bar, a_ts + h * ts, a_v + h * v_bar, a_stick, a_bounce,
+            a_wh + h * f_hoist * v_bar,
             a_drot + h * t * om_bar, a_dax + h * w * v_bar)
 
 
@@ -253,8 +254,8 @@ def _load(x, k, acc):
     return (x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD], x[X_S_BEHIND],
             x[X_HOLE], x[X_SINCE_STICK], x[X_W], x[X_T], x[X_DELTA], x[X_G], x[X_SUM_W],
             x[X_SUM_T], k[K_LAST], k[K_REGIME], acc[A_OMEGA_MIN], acc[A_OMEGA_MAX],
-            (acc[A_TIME], acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME],
-             acc[A_BOUNCE_TIME], acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST],
+            (acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME],
+             acc[A_BOUNCE_TIME], acc[A_WORK_HOIST],
              acc[A_DISSIPATED_ROT], acc[A_DISSIPATED_AX]))
 
 
@@ -268,8 +269,8 @@ def _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t
     x[X_SUM_W], x[X_SUM_T] = sum_w, sum_t
     k[K_LAST], k[K_REGIME] = k_last, regime
     acc[A_OMEGA_MIN], acc[A_OMEGA_MAX] = a_om_min, a_om_max
-    (acc[A_TIME], acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME], acc[A_BOUNCE_TIME],
-     acc[A_WORK_TOP_DRIVE], acc[A_WORK_WEIGHT], acc[A_WORK_HOIST], acc[A_DISSIPATED_ROT],
+    (acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME], acc[A_BOUNCE_TIME],
+     acc[A_WORK_HOIST], acc[A_DISSIPATED_ROT],
      acc[A_DISSIPATED_AX]) = a
 
 
@@ -383,6 +384,7 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
      regime, a_om_min, a_om_max, a) = _load(x, k, acc)
     steps, sampled = k[K_STEPS], k[K_SAMPLED]
     steps0 = steps
+    ts0_sum, v0_sum = acc[A_TS], acc[A_V]
     a_w, a_t = acc[A_W], acc[A_T]
 
     for _ in range(n_steps):
@@ -479,6 +481,10 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
            sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
     k[K_STEPS], k[K_SAMPLED] = steps, sampled
     acc[A_W], acc[A_T] = a_w, a_t
+    # integrals of the commands times a state: the commands are held over the call
+    acc[A_TIME] += (steps - steps0) * h
+    acc[A_WORK_TOP_DRIVE] += om0 * (acc[A_TS] - ts0_sum)
+    acc[A_WORK_WEIGHT] += w0 * (acc[A_V] - v0_sum)
     acc[A_W0] += (steps - steps0) * h * w0
     acc[A_OMEGA0] += (steps - steps0) * h * om0
     return out_row
