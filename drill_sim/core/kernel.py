@@ -232,7 +232,7 @@ def _blade_height(theta, phi, dphi, u, u_new):
 
 
 @njit(cache=True, inline="always")
-def _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist):
+def _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, f_hoist):
     """The window integrals (forces act over the whole step); ``a`` is the tuple (omega, ts,
     v, stick, bounce, work hoist, dissipated rotation, dissipated axial) and the updated tuple
     is returned. The integrals of w and t are kept as the sample sums (X_SUM_W, X_SUM_T),
@@ -244,8 +244,7 @@ def _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist):
     elif regime == REGIME_OFF_BOTTOM:
         a_bounce += h
     return (a_om + h * om_bar, a_ts + h * ts, a_v + h * v_bar, a_stick, a_bounce,
-            a_wh + h * f_hoist * v_bar,
-            a_drot + h * t * om_bar, a_dax + h * w * v_bar)
+            a_wh + h * f_hoist * v_bar, a_drot + h * t * om_bar, a_dax + h * w * v_bar)
 
 
 @njit(cache=True, inline="always")
@@ -334,8 +333,8 @@ def _located_step(x, k, surf, p, c, acc, event):
         elif k_new < k_last:
             k_last = k_new
             s_behind = surf[k_new & mask]
-        a = _accumulate(a, hs, regime, 0.5 * (om + om_new), 0.5 * (v + v_new), w, t, ts, w0,
-                        om0, f_hoist)
+        a = _accumulate(a, hs, regime, 0.5 * (om + om_new), 0.5 * (v + v_new), w, t, ts,
+                        f_hoist)
         sum_w += w * (hs / h)
         sum_t += t * (hs / h)
         u, v, phi, om, ptd = u_new, v_new, phi_new, om_new, ptd_m + h2 * om0
@@ -436,7 +435,7 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             elif k_new < k_last:
                 k_last = k_new
                 s_behind = surf[k_new & mask]
-            a = _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, w0, om0, f_hoist)
+            a = _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, f_hoist)
             sum_w += w              # what a sensor sees: forces averaged over its sample
             sum_t += t              # (and, folded in at each sample, the window's integrals)
 
