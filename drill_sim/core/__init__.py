@@ -1,6 +1,7 @@
 """The physics core of drill_sim: the Richard-Germay-Detournay drilling model, no ROS inside.
 
-Dimensionless inside (``Simulator``), SI at the boundary (``Rig``). See MODEL.md for the contract.
+Dimensionless inside (``Simulator``), SI at the boundary (``Rig``); msg_docs/model.md describes
+the model.
 """
 
 from .metrics import Metrics

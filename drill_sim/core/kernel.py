@@ -1,18 +1,28 @@
 """The numba stepping kernel: fixed step, exact set-valued bit-rock laws, fixed memory.
 
-Scheme (a Moreau midpoint time-stepping scheme, second order in smooth phases):
+Scheme (a Moreau midpoint time-stepping scheme, second order in smooth phases and through the
+switches of the laws that it locates):
 
 1. drift half a step: u_m = u + h/2 v, phi_m = phi + h/2 omega, phi_td_m = phi_td + h/2 omega0;
-2. evaluate the depth of cut delta = u_m - S(phi_m) on the rock surface left by earlier passes;
-3. solve the set-valued laws of MODEL.md section 2.2 *implicitly* for the end-of-step velocities
-   (the wear-flat factor g from the sign of v+, stick from the sign of omega+, the rock reaction
-   from the sign of v+ while stuck): each is a one-dimensional complementarity problem solved
-   exactly by trying its branches, so no law is ever regularised;
+2. evaluate the depth of cut delta = u_m - S(phi_m) on the rock surface left by earlier passes
+   (``_surface_at``);
+3. solve the set-valued laws of the model contract (section 2.2, msg_docs/model.md) *implicitly*
+   for the end-of-step velocities (``_bit_rock_law``): the wear-flat factor g from the sign of v+
+   (``_contact_law``), stick from the sign of omega+ and the breakaway torque
+   (``_breakaway_torque``), the rock reaction from the sign of v+ while stuck
+   (``_stick_reaction``); each is a one-dimensional complementarity problem solved exactly by
+   trying its branches, so no law is ever regularised; then the drawworks' hoisting-speed limit
+   (``_hoist_limit``). If a law switches inside the step (the bit stops turning, breaks away,
+   its wear flats lift off or land, it leaves the rock or lands), ``_bit_rock_law`` says where,
+   and the step is taken in parts split there (``_located_step``);
 4. drift the second half with the new velocities and let the blades sweep the surface:
-   S(theta) <- max(S(theta), u) at every grid node passed.
+   S(theta) <- max(S(theta), u) at every grid node passed (``_first_swept_node``,
+   ``_blade_height``); add the step to the window integrals (``_accumulate``).
 
 The surface is an array of N = 2^m nodes over one sector 2*pi/n, linear between nodes. All state
 lives in preallocated arrays indexed by the constants below, so advancing allocates nothing.
+Helpers that take an array stay few: inlined into the loop, each costs reference counting per
+step, so the array reads and writes of the hot loop are written in ``advance`` itself.
 """
 
 from __future__ import annotations
@@ -31,15 +41,21 @@ X_TS = 10           # string torque phi_td - phi at the end of the last step [C]
 X_DELTA = 11        # depth of cut per blade during the last step [L*]
 X_G = 12            # wear-flat contact factor during the last step [-]
 X_HOLE = 13         # deepest point of the rock surface, max of S [L*]
-NX = 14
+X_SUM_W, X_SUM_T = 14, 15   # sums of w and t over the steps since the last sample (an output
+NX = 16                     # row or a read of the sums); the window's A_W, A_T exclude them
 
 # integer state k
 K_LAST = 0          # absolute index of the last surface node the blades passed
 K_REGIME = 1        # REGIME_* of the last step
 K_STEPS = 2         # steps taken since the start
-NK = 3
+K_SAMPLED = 3       # K_STEPS at the last sample (X_SUM_* cover the steps since)
+K_REFUSED = 4       # 1 if the last call stopped before a step turning the bit over a sector
+NK = 5
 
 REGIME_ROTATING, REGIME_STUCK, REGIME_OFF_BOTTOM = 0, 1, 2
+
+EVENT_MARGIN = 1e-9     # a switch closer than this (fraction of the step) to its ends is not split
+MAX_SPLITS = 2          # switches located per step
 
 # parameters p
 P_N, P_PSI, P_LAM, P_BETA, P_H, P_DTHETA, P_INV_DTHETA = range(7)
@@ -49,13 +65,14 @@ NP = 7
 C_W0, C_OMEGA0, C_V_MIN = 0, 1, 2   # C_V_MIN: lowest axial velocity (hoisting-speed limit)
 NC = 3
 
-# accumulators a, integrals over the metrics window
+# accumulators a, integrals over the metrics window (A_W, A_T up to the last sample: add
+# h X_SUM_W, h X_SUM_T for the window's integrals)
 (A_TIME, A_OMEGA, A_OMEGA_MIN, A_OMEGA_MAX, A_W, A_T, A_TS, A_V, A_STICK_TIME, A_BOUNCE_TIME,
  A_WORK_TOP_DRIVE, A_WORK_WEIGHT, A_WORK_HOIST, A_DISSIPATED_ROT, A_DISSIPATED_AX,
  A_W0, A_OMEGA0) = range(17)
 NA = 17
 
-# output columns
+# output columns (O_W, O_T: means over the steps since the previous sample or row)
 (O_TAU, O_U, O_V, O_PHI, O_OMEGA, O_PHI_TD, O_W, O_T, O_TS, O_DELTA, O_REGIME, O_W0, O_OMEGA0,
  O_G) = range(14)
 NO = 14
@@ -63,7 +80,7 @@ NO = 14
 
 @njit(cache=True, inline="always")
 def _surface_at(surf, mask, phi, inv_dtheta, k_last, s_behind):
-    """S(phi) before the current pass, linear between nodes."""
+    """The rock surface S(phi) before the current pass, linear between nodes, and its slope."""
     pos = phi * inv_dtheta
     km = math.floor(pos)
     frac = pos - km
@@ -73,7 +90,266 @@ def _surface_at(surf, mask, phi, inv_dtheta, k_last, s_behind):
     else:
         s0 = surf[k0 & mask]
     s1 = surf[(k0 + 1) & mask]
-    return s0 + frac * (s1 - s0)
+    return s0 + frac * (s1 - s0), (s1 - s0) * inv_dtheta
+
+
+@njit(cache=True, inline="always")
+def _breakaway_torque(v, hpsi, w0, nd, beta_lam):
+    """The stick law: a stuck bit stays stuck while T_s <= T_max.
+
+    T_max = n delta + beta lambda (cutting plus fully mobilised wear-flat friction) while the
+    bit is pressed on the rock; n delta alone when it would lift off (friction lost).
+    """
+    if v + hpsi * w0 >= 0.0:
+        return nd + beta_lam
+    return nd
+
+
+@njit(cache=True, inline="always")
+def _contact_law(v, hpsi, w0, nd, lam):
+    """Cutting plus wear-flat contact with the complementarity on g; returns (g, v+, and v+ of
+    the branches g = 1 and g = 0).
+
+    g = 1 if v+ > 0, g = 0 if v+ < 0, and g in [0, 1] keeping v+ = 0 (an axial stick): each
+    branch is tried in turn on the implicit axial update v+ = v + h psi (w0 - n delta - lam g).
+    """
+    v1 = v + hpsi * (w0 - nd - lam)              # branch g = 1 (v+ > 0)
+    if v1 > 0.0:
+        return 1.0, v1, v1, v1 + hpsi * lam
+    v0 = v + hpsi * (w0 - nd)                    # branch g = 0 (v+ < 0)
+    if v0 < 0.0:
+        return 0.0, v0, v1, v0
+    friction = hpsi * lam                        # axial stick, g in [0, 1] (v0 <= friction)
+    g = v0 / friction if friction > 0.0 else 0.0
+    return g, 0.0, v1, v0
+
+
+@njit(cache=True, inline="always")
+def _stick_reaction(v, om, ts, w0, h, hpsi):
+    """Omega+ = 0 held by the rock: the torque is the reaction; returns (v+, w, t, g).
+
+    The rock only pushes: a bit moving down or resting stops (v+ = 0, w is the reaction);
+    a bit that would rise keeps rising off the wear flats (the one-way axial hold).
+    """
+    t = ts + om / h
+    v_try = v + hpsi * w0
+    if v_try > 0.0:
+        return 0.0, w0 + v / hpsi, t, 1.0
+    return v_try, 0.0, t, 0.0
+
+
+@njit(cache=True, inline="always")
+def _crossing(earliest, start, end):
+    """The earlier of ``earliest`` and where a switching function linear over the step crosses
+    0 from ``start`` to ``end``, as fractions of the step (any value >= 1: no crossing)."""
+    if start != end:
+        at = start / (start - end)
+        if at < earliest:
+            return at
+    return earliest
+
+
+@njit(cache=True, inline="always")
+def _bit_rock_law(delta, slope, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi):
+    """The set-valued bit-rock laws for one step; returns (regime, w, t, g, v+, omega+, event).
+
+    Off bottom (delta < 0) nothing acts; in contact a stuck bit stays stuck while the stick law
+    holds, otherwise the contact law gives g and v+, and a bit that would turn backwards is
+    stuck instead (no backward rotation in contact). ``event`` locates the first switch of a
+    law inside the step, as a fraction of it (>= 1: none): the bit stops turning (omega
+    crosses 0), breaks away (T_s crosses T_max, T_s rising at omega0 while stuck), its wear
+    flats engage or lift off (V crosses 0), or it lands or leaves the rock (delta crosses 0,
+    delta at the step's ends from its rate V - S' omega, S' the surface's ``slope``). The laws
+    are linear between switches, so each crossing is interpolated linearly over the step.
+    """
+    event = 2.0
+    if delta < 0.0:
+        regime = REGIME_OFF_BOTTOM
+        w = 0.0
+        t = 0.0
+        g = 0.0
+        v_new = v + hpsi * w0
+        om_new = om + h * ts
+    else:
+        nd = n * delta
+        stuck = False
+        if regime == REGIME_STUCK:
+            t_max = _breakaway_torque(v, hpsi, w0, nd, beta * lam)
+            stuck = ts <= t_max
+            rise = h * om0                       # T_s over the step, the bit held
+            if ts + 0.5 * rise > t_max and rise > 0.0:
+                event = _crossing(event, t_max - (ts - 0.5 * rise), t_max - (ts + 0.5 * rise))
+        if not stuck:
+            g, v_new, v1, v0 = _contact_law(v, hpsi, w0, nd, lam)
+            if v > 0.0 and g < 1.0:              # the wear flats lift off
+                event = _crossing(event, v, v1)
+            elif v < 0.0 and g > 0.0:            # the wear flats land
+                event = _crossing(event, v, v0)
+            w = nd + lam * g
+            t = nd + beta * lam * g
+            om_new = om + h * (ts - t)
+            if om_new > 0.0:
+                regime = REGIME_ROTATING
+            else:
+                if regime == REGIME_ROTATING and om > 0.0:
+                    event = _crossing(event, om, om_new)        # the bit stops turning
+                stuck = True
+        if stuck:
+            regime = REGIME_STUCK
+            om_new = 0.0
+            v_new, w, t, g = _stick_reaction(v, om, ts, w0, h, hpsi)
+    delta_start = delta - 0.5 * h * (v - slope * om)      # the bit lands or leaves the rock
+    delta_end = delta + 0.5 * h * (v_new - slope * om_new)
+    if (delta_start < 0.0) != (delta_end < 0.0):
+        event = _crossing(event, delta_start, delta_end)
+    return regime, w, t, g, v_new, om_new, event
+
+
+@njit(cache=True, inline="always")
+def _hoist_limit(v_new, v_min, hpsi):
+    """The drawworks holds the string back: v+ >= v_min; returns (v+, hoist force)."""
+    if v_new < v_min:
+        return v_min, (v_min - v_new) / hpsi
+    return v_new, 0.0
+
+
+@njit(cache=True, inline="always")
+def _first_swept_node(k_last, k_new, n_nodes):
+    """The blade sweep: the first node (absolute index) the blades pass in a step that ends
+    past node ``k_new``; at most one sector's ``n_nodes`` nodes are swept in a step."""
+    k_first = k_last + 1
+    if k_new - k_first >= n_nodes:
+        k_first = k_new - n_nodes + 1
+    return k_first
+
+
+@njit(cache=True, inline="always")
+def _blade_height(theta, phi, dphi, u, u_new):
+    """The blade sweep: the bit's axial position when a blade passes the angle ``theta`` in
+    a step from (phi, u) to (phi + dphi, u_new), u linear in phi over the step."""
+    frac = (theta - phi) / dphi
+    return u + frac * (u_new - u)
+
+
+@njit(cache=True, inline="always")
+def _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, f_hoist):
+    """The window integrals (forces act over the whole step); ``a`` is the tuple (omega, ts,
+    v, stick, bounce, work hoist, dissipated rotation, dissipated axial) and the updated tuple
+    is returned. The integrals of w and t are kept as the sample sums (X_SUM_W, X_SUM_T),
+    folded in at each sample; time and the work of the held commands (omega0 ts, w0 v) are
+    added once a call, in ``advance``."""
+    a_om, a_ts, a_v, a_stick, a_bounce, a_wh, a_drot, a_dax = a
+    if regime == REGIME_STUCK:
+        a_stick += h
+    elif regime == REGIME_OFF_BOTTOM:
+        a_bounce += h
+    return (a_om + h * om_bar, a_ts + h * ts, a_v + h * v_bar, a_stick, a_bounce,
+            a_wh + h * f_hoist * v_bar, a_drot + h * t * om_bar, a_dax + h * w * v_bar)
+
+
+@njit(cache=True, inline="always")
+def _load(x, k, acc):
+    """The state arrays as the stepper's locals."""
+    return (x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD], x[X_S_BEHIND],
+            x[X_HOLE], x[X_SINCE_STICK], x[X_W], x[X_T], x[X_DELTA], x[X_G], x[X_SUM_W],
+            x[X_SUM_T], k[K_LAST], k[K_REGIME], acc[A_OMEGA_MIN], acc[A_OMEGA_MAX],
+            (acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME],
+             acc[A_BOUNCE_TIME], acc[A_WORK_HOIST],
+             acc[A_DISSIPATED_ROT], acc[A_DISSIPATED_AX]))
+
+
+@njit(cache=True, inline="always")
+def _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
+           sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a):
+    """The stepper's locals back into the state arrays (inverse of ``_load``)."""
+    x[X_TAU], x[X_U], x[X_V], x[X_PHI], x[X_OMEGA], x[X_PHI_TD] = tau, u, v, phi, om, ptd
+    x[X_S_BEHIND], x[X_HOLE], x[X_SINCE_STICK] = s_behind, hole, since_stick
+    x[X_W], x[X_T], x[X_TS], x[X_DELTA], x[X_G] = w, t, ptd - phi, delta, g
+    x[X_SUM_W], x[X_SUM_T] = sum_w, sum_t
+    k[K_LAST], k[K_REGIME] = k_last, regime
+    acc[A_OMEGA_MIN], acc[A_OMEGA_MAX] = a_om_min, a_om_max
+    (acc[A_OMEGA], acc[A_TS], acc[A_V], acc[A_STICK_TIME], acc[A_BOUNCE_TIME],
+     acc[A_WORK_HOIST], acc[A_DISSIPATED_ROT],
+     acc[A_DISSIPATED_AX]) = a
+
+
+@njit(cache=True)
+def _located_step(x, k, surf, p, c, acc, event):
+    """One step taken in parts split where a law switches, from the state arrays and back.
+
+    ``event`` is where the first switch falls, as a fraction of the step (``_bit_rock_law``):
+    the step is taken up to it, then on from it, each part with the same midpoint scheme, so
+    the laws stay linear within each part and the scheme keeps its second order through the
+    switch; a further switch inside a part is located too, up to MAX_SPLITS in all. Only the
+    steps holding a switch come here (a few per stick-slip cycle), so ``advance`` keeps its
+    plain loop for the others. A part that would turn the bit over a sector sets K_REFUSED and
+    stops, the parts before it taken.
+    """
+    n, lam, beta, h, psi = p[P_N], p[P_LAM], p[P_BETA], p[P_H], p[P_PSI]
+    inv_dth, dth = p[P_INV_DTHETA], p[P_DTHETA]
+    w0, om0, v_min = c[C_W0], c[C_OMEGA0], c[C_V_MIN]
+    n_nodes = surf.shape[0]
+    mask = n_nodes - 1
+    sector = n_nodes * dth
+    (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t, k_last,
+     regime, a_om_min, a_om_max, a) = _load(x, k, acc)
+    hs = event * h
+    left = h
+    splits = 1
+    while True:
+        h2 = 0.5 * hs
+        hpsi = hs * psi
+        u_m = u + h2 * v
+        phi_m = phi + h2 * om
+        ptd_m = ptd + h2 * om0
+        ts = ptd_m - phi_m
+        s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
+        delta_new = u_m - s_m
+        regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
+            delta_new, slope, regime, v, om, ts, w0, om0, n, lam, beta, hs, hpsi)
+        if splits < MAX_SPLITS and EVENT_MARGIN < event < 1.0 - EVENT_MARGIN:
+            splits += 1
+            hs *= event
+            continue
+        v_new, f_hoist = _hoist_limit(v_new, v_min, hpsi)
+        phi_new = phi_m + h2 * om_new
+        if phi_new - phi > sector:
+            k[K_REFUSED] = 1
+            break
+        regime, w, t, g, delta = regime_new, w_new, t_new, g_new, delta_new
+        u_new = u_m + h2 * v_new
+        k_new = np.int64(math.floor(phi_new * inv_dth))
+        if k_new > k_last:
+            dphi = phi_new - phi
+            for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
+                uc = _blade_height(kk * dth, phi, dphi, u, u_new)
+                j = kk & mask
+                s_behind = surf[j]
+                if uc > s_behind:
+                    surf[j] = uc
+                    if uc > hole:
+                        hole = uc
+            k_last = k_new
+        elif k_new < k_last:
+            k_last = k_new
+            s_behind = surf[k_new & mask]
+        a = _accumulate(a, hs, regime, 0.5 * (om + om_new), 0.5 * (v + v_new), w, t, ts,
+                        f_hoist)
+        sum_w += w * (hs / h)
+        sum_t += t * (hs / h)
+        u, v, phi, om, ptd = u_new, v_new, phi_new, om_new, ptd_m + h2 * om0
+        tau += hs
+        if om < a_om_min:
+            a_om_min = om
+        if om > a_om_max:
+            a_om_max = om
+        since_stick = 0.0 if regime == REGIME_STUCK else since_stick + hs
+        left -= hs
+        if left <= 0.0:
+            break
+        hs = left
+    _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
+           sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
 
 
 @njit(cache=True)
@@ -81,55 +357,34 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     """Advance the state by ``n_steps`` fixed steps; return the next free row of ``out``.
 
     Every ``out_every`` global steps a row of outputs is written to ``out`` while rows remain.
+    A step in which a law switches is taken in parts by ``_located_step``. A step that would
+    turn the bit forward by more than a sector 2 pi/n is refused: the rock surface cannot be
+    swept (every node would be passed more than once) nor the depth of cut measured; the call
+    stops before it, state as after the previous step, K_REFUSED = 1.
     """
     n = p[P_N]
-    psi = p[P_PSI]
     lam = p[P_LAM]
     beta = p[P_BETA]
     h = p[P_H]
     h2 = 0.5 * h
-    hpsi = h * psi
+    hpsi = h * p[P_PSI]
     inv_dth = p[P_INV_DTHETA]
     dth = p[P_DTHETA]
     w0 = c[C_W0]
     om0 = c[C_OMEGA0]
     v_min = c[C_V_MIN]
-    mask = surf.shape[0] - 1
     n_nodes = surf.shape[0]
+    mask = n_nodes - 1
     rows = out.shape[0]
+    sector = n_nodes * dth
+    k[K_REFUSED] = 0
 
-    tau = x[X_TAU]
-    u = x[X_U]
-    v = x[X_V]
-    phi = x[X_PHI]
-    om = x[X_OMEGA]
-    ptd = x[X_PHI_TD]
-    s_behind = x[X_S_BEHIND]
-    hole = x[X_HOLE]
-    since_stick = x[X_SINCE_STICK]
-    k_last = k[K_LAST]
-    regime = k[K_REGIME]
-    steps = k[K_STEPS]
-    w = x[X_W]
-    t = x[X_T]
-    delta = x[X_DELTA]
-    g = x[X_G]
-
-    a_time = acc[A_TIME]
-    a_om = acc[A_OMEGA]
-    a_om_min = acc[A_OMEGA_MIN]
-    a_om_max = acc[A_OMEGA_MAX]
-    a_w = acc[A_W]
-    a_t = acc[A_T]
-    a_ts = acc[A_TS]
-    a_v = acc[A_V]
-    a_stick = acc[A_STICK_TIME]
-    a_bounce = acc[A_BOUNCE_TIME]
-    a_wtd = acc[A_WORK_TOP_DRIVE]
-    a_ww = acc[A_WORK_WEIGHT]
-    a_wh = acc[A_WORK_HOIST]
-    a_drot = acc[A_DISSIPATED_ROT]
-    a_dax = acc[A_DISSIPATED_AX]
+    (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t, k_last,
+     regime, a_om_min, a_om_max, a) = _load(x, k, acc)
+    steps, sampled = k[K_STEPS], k[K_SAMPLED]
+    steps0 = steps
+    ts0_sum, v0_sum = acc[A_TS], acc[A_V]
+    a_w, a_t = acc[A_W], acc[A_T]
 
     for _ in range(n_steps):
         # 1. half drift
@@ -137,130 +392,68 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
         phi_m = phi + h2 * om
         ptd_m = ptd + h2 * om0
         ts = ptd_m - phi_m
-
         # 2. depth of cut on the surface left by earlier passes
-        delta = u_m - _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
-
+        s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
+        delta_new = u_m - s_m
         # 3. set-valued laws, solved for the end-of-step velocities
-        if delta < 0.0:
-            regime = REGIME_OFF_BOTTOM
-            w = 0.0
-            t = 0.0
-            g = 0.0
-            v_new = v + hpsi * w0
-            om_new = om + h * ts
+        regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
+            delta_new, slope, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi)
+        if EVENT_MARGIN < event < 1.0 - EVENT_MARGIN:
+            # a law switches inside the step: take it in parts (rare)
+            _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta,
+                   g, sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
+            _located_step(x, k, surf, p, c, acc, event)
+            (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t,
+             k_last, regime, a_om_min, a_om_max, a) = _load(x, k, acc)
+            if k[K_REFUSED]:
+                break
         else:
-            nd = n * delta
-            stuck = False
+            v_new, f_hoist = _hoist_limit(v_new, v_min, hpsi)
+            # 4. second half drift and the sweep of the blades over the rock
+            phi_new = phi_m + h2 * om_new
+            if phi_new - phi > sector:
+                k[K_REFUSED] = 1                    # more than a sector in one step: refused
+                break
+            regime, w, t, g, delta = regime_new, w_new, t_new, g_new, delta_new
+            v_bar = 0.5 * (v + v_new)
+            om_bar = 0.5 * (om + om_new)
+            u_new = u_m + h2 * v_new
+            # the blades sweep the rock: S <- max(S, u) at every node passed; backward
+            # rotation (possible only off bottom) cuts nothing
+            k_new = np.int64(math.floor(phi_new * inv_dth))
+            if k_new > k_last:
+                dphi = phi_new - phi
+                for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
+                    uc = _blade_height(kk * dth, phi, dphi, u, u_new)
+                    j = kk & mask
+                    s_behind = surf[j]             # the node's value before this pass
+                    if uc > s_behind:
+                        surf[j] = uc
+                        if uc > hole:
+                            hole = uc
+                k_last = k_new
+            elif k_new < k_last:
+                k_last = k_new
+                s_behind = surf[k_new & mask]
+            a = _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, f_hoist)
+            sum_w += w              # what a sensor sees: forces averaged over its sample
+            sum_t += t              # (and, folded in at each sample, the window's integrals)
+
+            u = u_new
+            v = v_new
+            phi = phi_new
+            om = om_new
+            ptd = ptd_m + h2 * om0
+            tau += h
+            if om < a_om_min:
+                a_om_min = om
+            if om > a_om_max:
+                a_om_max = om
             if regime == REGIME_STUCK:
-                # stays stuck while T_s <= T_max; full friction only while pressed on the rock
-                if v + hpsi * w0 >= 0.0:
-                    t_max = nd + beta * lam
-                else:
-                    t_max = nd
-                stuck = ts <= t_max
-            if not stuck:
-                v1 = v + hpsi * (w0 - nd - lam)          # branch g = 1 (v+ > 0)
-                if v1 > 0.0:
-                    g = 1.0
-                    v_new = v1
-                else:
-                    v0 = v + hpsi * (w0 - nd)           # branch g = 0 (v+ < 0)
-                    if v0 < 0.0:
-                        g = 0.0
-                        v_new = v0
-                    else:                               # axial stick, g in [0, 1]
-                        g = v0 / (hpsi * lam) if lam > 0.0 else 0.0
-                        v_new = 0.0
-                w = nd + lam * g
-                t = nd + beta * lam * g
-                om_free = om + h * (ts - t)
-                if om_free > 0.0:
-                    regime = REGIME_ROTATING
-                    om_new = om_free
-                else:
-                    stuck = True
-            if stuck:
-                # omega+ = 0, torque is the reaction; the rock only pushes (v+ <= 0)
-                regime = REGIME_STUCK
-                om_new = 0.0
-                t = ts + om / h
-                g = 1.0
-                v_try = v + hpsi * w0
-                if v_try > 0.0:
-                    v_new = 0.0
-                    w = w0 + v / hpsi
-                else:
-                    v_new = v_try
-                    w = 0.0
-                    g = 0.0
-
-        # hoisting-speed limit: the drawworks holds the string back
-        f_hoist = 0.0
-        if v_new < v_min:
-            f_hoist = (v_min - v_new) / hpsi
-            v_new = v_min
-
-        # 4. second half drift and the sweep of the blades over the rock
-        v_bar = 0.5 * (v + v_new)
-        om_bar = 0.5 * (om + om_new)
-        u_new = u_m + h2 * v_new
-        phi_new = phi_m + h2 * om_new
-        k_new = np.int64(math.floor(phi_new * inv_dth))
-        if k_new > k_last:
-            k_first = k_last + 1
-            if k_new - k_first >= n_nodes:
-                k_first = k_new - n_nodes + 1
-            dphi = phi_new - phi
-            for kk in range(k_first, k_new + 1):
-                frac = (kk * dth - phi) / dphi
-                uc = u + frac * (u_new - u)
-                j = kk & mask
-                old = surf[j]
-                if uc > old:
-                    surf[j] = uc
-                    if uc > hole:
-                        hole = uc
-                s_behind = old
-            k_last = k_new
-        elif k_new < k_last:
-            # backward rotation, possible only off bottom: nothing is cut
-            k_last = k_new
-            s_behind = surf[k_new & mask]
-
-        # accumulate the window integrals (forces act over the whole step)
-        a_time += h
-        a_om += h * om_bar
-        a_w += h * w
-        a_t += h * t
-        a_ts += h * ts
-        a_v += h * v_bar
-        if regime == REGIME_STUCK:
-            a_stick += h
-        elif regime == REGIME_OFF_BOTTOM:
-            a_bounce += h
-        a_wtd += h * ts * om0
-        a_ww += h * w0 * v_bar
-        a_wh += h * f_hoist * v_bar
-        a_drot += h * t * om_bar
-        a_dax += h * w * v_bar
-
-        u = u_new
-        v = v_new
-        phi = phi_new
-        om = om_new
-        ptd = ptd_m + h2 * om0
-        tau += h
+                since_stick = 0.0
+            else:
+                since_stick += h
         steps += 1
-        if om < a_om_min:
-            a_om_min = om
-        if om > a_om_max:
-            a_om_max = om
-        if regime == REGIME_STUCK:
-            since_stick = 0.0
-        else:
-            since_stick += h
-
         if out_row < rows and steps % out_every == 0:
             out[out_row, O_TAU] = tau
             out[out_row, O_U] = u
@@ -268,8 +461,8 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             out[out_row, O_PHI] = phi
             out[out_row, O_OMEGA] = om
             out[out_row, O_PHI_TD] = ptd
-            out[out_row, O_W] = w
-            out[out_row, O_T] = t
+            out[out_row, O_W] = sum_w / (steps - sampled)   # means over the row's interval
+            out[out_row, O_T] = sum_t / (steps - sampled)
             out[out_row, O_TS] = ptd - phi
             out[out_row, O_DELTA] = delta
             out[out_row, O_REGIME] = regime
@@ -277,39 +470,20 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             out[out_row, O_OMEGA0] = om0
             out[out_row, O_G] = g
             out_row += 1
+            a_w += h * sum_w
+            a_t += h * sum_t
+            sum_w = 0.0
+            sum_t = 0.0
+            sampled = steps
 
-    x[X_TAU] = tau
-    x[X_U] = u
-    x[X_V] = v
-    x[X_PHI] = phi
-    x[X_OMEGA] = om
-    x[X_PHI_TD] = ptd
-    x[X_S_BEHIND] = s_behind
-    x[X_HOLE] = hole
-    x[X_SINCE_STICK] = since_stick
-    x[X_W] = w
-    x[X_T] = t
-    x[X_TS] = ptd - phi
-    x[X_DELTA] = delta
-    x[X_G] = g
-    k[K_LAST] = k_last
-    k[K_REGIME] = regime
-    k[K_STEPS] = steps
-    acc[A_TIME] = a_time
-    acc[A_OMEGA] = a_om
-    acc[A_OMEGA_MIN] = a_om_min
-    acc[A_OMEGA_MAX] = a_om_max
-    acc[A_W] = a_w
-    acc[A_T] = a_t
-    acc[A_TS] = a_ts
-    acc[A_V] = a_v
-    acc[A_STICK_TIME] = a_stick
-    acc[A_BOUNCE_TIME] = a_bounce
-    acc[A_WORK_TOP_DRIVE] = a_wtd
-    acc[A_WORK_WEIGHT] = a_ww
-    acc[A_WORK_HOIST] = a_wh
-    acc[A_DISSIPATED_ROT] = a_drot
-    acc[A_DISSIPATED_AX] = a_dax
-    acc[A_W0] += n_steps * h * w0
-    acc[A_OMEGA0] += n_steps * h * om0
+    _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
+           sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
+    k[K_STEPS], k[K_SAMPLED] = steps, sampled
+    acc[A_W], acc[A_T] = a_w, a_t
+    # integrals of the commands times a state: the commands are held over the call
+    acc[A_TIME] += (steps - steps0) * h
+    acc[A_WORK_TOP_DRIVE] += om0 * (acc[A_TS] - ts0_sum)
+    acc[A_WORK_WEIGHT] += w0 * (acc[A_V] - v0_sum)
+    acc[A_W0] += (steps - steps0) * h * w0
+    acc[A_OMEGA0] += (steps - steps0) * h * om0
     return out_row

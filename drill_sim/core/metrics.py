@@ -1,4 +1,4 @@
-"""Metrics of MODEL.md section 7 over a window, from the kernel's running integrals.
+"""Metrics (model contract, section 7) over a window, from the kernel's running integrals.
 
 SSI (stick-slip severity index) = (omega_max - omega_min) / (2 omega_mean) of the bit speed over
 the window: 0 for steady rotation, >= 1 whenever the bit stops. Means are time averages over

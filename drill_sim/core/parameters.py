@@ -1,6 +1,6 @@
 """Model parameters in SI and as the dimensionless groups of the RGD scaling.
 
-The core integrates the dimensionless equations (MODEL.md section 3); users give either
+The core integrates the dimensionless equations (model contract, section 3); users give either
 SI parameters (lumped, or from the string geometry) or the groups (n, psi, lambda, beta)
 directly. Every constructor validates its inputs so that a bad value is refused with a
 message naming the parameter, its value and the allowed range, before anything runs.
@@ -66,7 +66,7 @@ def _range_text(low: float | None, low_inclusive: bool, high: float | None) -> s
 
 @dataclass(frozen=True)
 class Groups:
-    """The dimensionless groups of MODEL.md section 3.
+    """The dimensionless groups of the model contract (section 3).
 
     n: blade count; psi: axial-to-torsional inertia ratio; lam (lambda): wear-flat friction
     weight over F*; beta = mu * gamma * zeta: friction-to-cutting torque ratio.
@@ -87,7 +87,7 @@ class Groups:
 
 @dataclass(frozen=True)
 class Scales:
-    """Reference scales that turn dimensionless quantities into SI (MODEL.md section 3)."""
+    """Reference scales that turn dimensionless quantities into SI (model contract, section 3)."""
 
     time_s: float             # t* = sqrt(I/C)
     length_m: float           # L* = 2C/(eps a^2)
@@ -105,7 +105,7 @@ class Scales:
 
 @dataclass(frozen=True)
 class RigParameters:
-    """Lumped SI parameters of bit, rock and drill string (MODEL.md sections 1-2)."""
+    """Lumped SI parameters of bit, rock and drill string (model contract, sections 1-2)."""
 
     bit_radius_m: float                  # a
     blade_count: int                     # n
@@ -181,9 +181,10 @@ class RigParameters:
 class StringGeometry:
     """A drill string of pipe over collars, from which the lumped C, I, M and W_s follow.
 
-    Following MODEL.md section 8: the pipe is the torsional spring (C = G J_pipe / L_pipe),
-    the collars are the rigid BHA (I = rho J_collar L_collar, M = rho A_collar L_collar), and
-    the submerged weight is the buoyed weight of pipe and collars together.
+    Following the model contract (section 8): the pipe is the torsional spring
+    (C = G J_pipe / L_pipe), the collars are the rigid BHA (I = rho J_collar L_collar,
+    M = rho A_collar L_collar), and the submerged weight is the buoyed weight of pipe and
+    collars together.
     """
 
     pipe_length_m: float

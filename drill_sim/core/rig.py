@@ -11,12 +11,12 @@ from typing import NamedTuple
 
 from . import kernel as kn
 from .parameters import ParameterError, RigParameters, check_number
-from .simulator import DEFAULT_DT, Simulator
+from .simulator import DEFAULT_DT, STEPS_PER_PERIOD, Simulator, fastest_period, max_step
 from .stability import SteadyState, steady_state
 
 RPM = 2.0 * math.pi / 60.0   # rad/s per rpm
 
-# The bit's regime in the last step, as the kernel decides it (MODEL.md section 2.2); published
+# The bit's regime in the last step, as the kernel decides it (model contract, 2.2); published
 # by the node and recorded, so every consumer uses the kernel's own decision.
 REGIME_ROTATING, REGIME_STUCK, REGIME_OFF_BOTTOM = (kn.REGIME_ROTATING, kn.REGIME_STUCK,
                                                    kn.REGIME_OFF_BOTTOM)
@@ -33,8 +33,8 @@ class RigSample(NamedTuple):
     time_s: float
     bit_speed_rad_s: float
     rop_m_s: float                 # bit axial velocity (rate of penetration when > 0)
-    wob_n: float                   # weight on bit, stick reaction included
-    tob_nm: float                  # torque on bit
+    wob_n: float                   # weight on bit, mean since the previous sample (stick reaction
+    tob_nm: float                  # included); torque on bit, likewise (see Rig.sample)
     surface_torque_nm: float       # string torque C (phi_td - phi), as the top drive measures it
     depth_of_cut_m: float          # per revolution, d = n d_n (negative off bottom)
     bit_depth_m: float             # bit position below its start
@@ -47,6 +47,16 @@ class RigSample(NamedTuple):
     off_bottom: bool
     stick_slip: bool               # a stick phase within the stick-slip window
     regime: int                    # the kernel's regime of the last step: REGIME_* below
+
+
+def _check_step(dt_s: float, params: RigParameters) -> None:
+    """Refuse a step that cannot resolve the fastest mode of these parameters, in SI."""
+    limit_s = max_step(params.groups) * params.scales.time_s
+    if dt_s > limit_s * (1.0 + 1e-12):
+        raise ParameterError(
+            f"dt_s = {dt_s:g} s cannot resolve the fastest mode of these parameters (period "
+            f"{fastest_period(params.groups) * params.scales.time_s:.4g} s): expected dt_s <= "
+            f"{limit_s:.4g} s, {STEPS_PER_PERIOD} steps a period")
 
 
 class Rig:
@@ -65,11 +75,13 @@ class Rig:
         self.groups = params.groups
         ts = self.scales.time_s
         dt = DEFAULT_DT if dt_s is None else check_number("dt_s", dt_s) / ts
+        _check_step(dt * ts, params)
         self.sim = Simulator(self.groups, dt)
         self.set_stick_window(4.0 * math.pi * ts if stick_window_s is None else stick_window_s)
         self.set_hoist_speed_limit(hoist_speed_limit_m_s)
         self._hook_load_n = params.submerged_weight_n
         self._speed_rad_s = 0.0
+        self._forget_samples()
 
     # ---- conversions --------------------------------------------------------------------
     @property
@@ -102,14 +114,19 @@ class Rig:
             raise ParameterError(f"blade_count cannot change while running "
                                  f"({self.params.blade_count} -> {params.blade_count}): "
                                  "it changes the rock surface's sector; reset instead")
+        _check_step(self.dt_s, params)
         old, new = self.scales, params.scales
         s = self.sim.state()
+        sum_w, sum_t, n = self.sim.take_force_sums()     # carried over in SI to the next sample
+        self._pending = (self._pending[0] + sum_w * old.force_n,
+                         self._pending[1] + sum_t * old.stiffness_nm_per_rad, self._pending[2] + n)
         sim = Simulator(params.groups, self.dt_s / new.time_s)
         length = old.length_m / new.length_m
         sim.load_state(tau=s.tau * old.time_s / new.time_s, steps=self.sim.steps,
                        u=s.u * length, v=s.v * old.velocity_m_s / new.velocity_m_s, phi=s.phi,
                        omega=s.omega * new.time_s / old.time_s, phi_td=s.phi_td,
-                       surface=self.sim.surface * length, regime=s.regime,
+                       surface=self.sim.surface * length,
+                       surface_behind=self.sim.surface_behind * length, regime=s.regime,
                        since_stick=s.since_stick * old.time_s / new.time_s,
                        w=s.w * old.force_n / new.force_n,
                        t=s.t * old.stiffness_nm_per_rad / new.stiffness_nm_per_rad,
@@ -144,12 +161,14 @@ class Rig:
         self.command(top_drive_speed_rad_s, hook_load_n)
         self.sim.start_steady(self.w0_of(hook_load_n), self.omega0_of(top_drive_speed_rad_s),
                               perturbation)
+        self._forget_samples()
 
     def start_at_rest(self, gap_m: float = 0.0) -> None:
         """Bit at rest ``gap_m`` above a flat bottom, hanging (hook load = W_s), not rotating."""
         self.sim.start_at_rest(check_number("gap_m", gap_m, low_inclusive=True)
                                / self.scales.length_m)
         self.command(0.0, self.params.submerged_weight_n)
+        self._forget_samples()
 
     def steady_state(self, top_drive_speed_rad_s: float, hook_load_n: float) -> SteadyState:
         """The dimensionless steady state at these commands (NoSteadyDrilling if none)."""
@@ -193,9 +212,36 @@ class Rig:
         self.sim.reset_window()
 
     # ---- observation --------------------------------------------------------------------
+    def _forget_samples(self) -> None:
+        """After a start: no sample interval yet; force sums (SI) carried over a swap."""
+        self._pending = (0.0, 0.0, 0)
+        self._mean_forces: tuple[float, float] | None = None
+
+    def mean_forces(self) -> tuple[float, float]:
+        """(WOB [N], TOB [N m]) averaged over the steps since the previous call, as a sensor
+        sampled at these instants reports them: a stick or a landing is an impulse (the rigid
+        rock stops the bit within a step), and its mean over the interval does not depend on
+        the step. A call with no step since repeats the previous value; the first call after a
+        start reads the last step."""
+        sum_w, sum_t, n = self.sim.take_force_sums()
+        pend_w, pend_t, pend_n = self._pending
+        n += pend_n
+        if n > 0:
+            sc = self.scales
+            self._mean_forces = ((pend_w + sum_w * sc.force_n) / n,
+                                 (pend_t + sum_t * sc.stiffness_nm_per_rad) / n)
+            self._pending = (0.0, 0.0, 0)
+        elif self._mean_forces is None:
+            x = self.sim.live_state
+            self._mean_forces = (float(x[kn.X_W]) * self.scales.force_n,
+                                 float(x[kn.X_T]) * self.scales.stiffness_nm_per_rad)
+        return self._mean_forces
+
     def sample(self) -> RigSample:
-        """The rig's outputs now, in SI. Read straight from the state arrays: the node calls
-        this every tick."""
+        """The rig's outputs now, in SI, read straight from the state arrays (the node calls
+        this every tick). WOB and TOB are the means since the previous sample (``mean_forces``;
+        the node samples every tick, so the tick mean); everything else is the value now."""
+        wob_n, tob_nm = self.mean_forces()
         x, regime = self.sim.live_state, self.sim.regime
         sc = self.scales
         c = sc.stiffness_nm_per_rad
@@ -203,8 +249,8 @@ class Rig:
             time_s=self.time_s,
             bit_speed_rad_s=float(x[kn.X_OMEGA]) / sc.time_s,
             rop_m_s=float(x[kn.X_V]) * sc.velocity_m_s,
-            wob_n=float(x[kn.X_W]) * sc.force_n,
-            tob_nm=float(x[kn.X_T]) * c,
+            wob_n=wob_n,
+            tob_nm=tob_nm,
             surface_torque_nm=float(x[kn.X_TS]) * c,
             depth_of_cut_m=self.groups.n * float(x[kn.X_DELTA]) * sc.length_m,
             bit_depth_m=float(x[kn.X_U]) * sc.length_m,

@@ -2,7 +2,8 @@
 
 ``Simulator`` owns the state arrays of the kernel and is what the ROS node advances every tick.
 ``Simulator.run`` is the offline driver, returning a ``Trajectory`` with named columns.
-All quantities here are dimensionless (MODEL.md section 3); ``drill_sim.core.rig`` converts.
+All quantities here are dimensionless (model contract, section 3); ``drill_sim.core.rig``
+converts.
 """
 
 from __future__ import annotations
@@ -19,8 +20,28 @@ from .parameters import Groups, ParameterError, Scales, check_number
 from .si_trajectory import SITrajectory
 from .stability import steady_state
 
-DEFAULT_DT = 5e-4            # [t*]; chosen from the convergence study (tests/test_convergence.py)
+DEFAULT_DT = 5e-4            # [t*]; halving it moves stationary metrics ~2e-5 (test_validation)
 MAX_NODES = 2**22            # surface memory cap: 32 MiB
+
+
+STEPS_PER_PERIOD = 20       # the fastest mode's period holds at least this many steps
+
+
+def fastest_period(groups: Groups) -> float:
+    """Period [t*] of the fastest mode: axial in contact, 2 pi/sqrt(n psi) (the cutting law's
+    stiffness n against the axial inertia), or torsional, 2 pi, whichever is shorter."""
+    return 2.0 * math.pi / math.sqrt(max(groups.n * groups.psi, 1.0))
+
+
+def max_step(groups: Groups) -> float:
+    """The largest step [t*] that resolves the fastest mode: its period / STEPS_PER_PERIOD.
+
+    The midpoint scheme's phase error on an oscillation of frequency f is (h f)^2/24 per
+    radian; at 20 steps a period (h f = 0.31) that is 0.4 % of the frequency, and the stick and
+    contact events of the bit, which last a fraction of the axial period, are still seen by a
+    few steps. A step of a period or more lets the stick law hold the bit for good (psi = 1e4,
+    dt = 0.05: stick fraction 1.0 where a resolving step gives none)."""
+    return min(0.05, fastest_period(groups) / STEPS_PER_PERIOD)
 
 
 def surface_nodes(groups: Groups, dt: float) -> int:
@@ -34,7 +55,7 @@ def surface_nodes(groups: Groups, dt: float) -> int:
 
 @dataclass(frozen=True)
 class StateView:
-    """A copy of the instantaneous state, dimensionless, with MODEL.md's names."""
+    """A copy of the instantaneous state, dimensionless, with the model contract's names."""
 
     tau: float
     u: float
@@ -43,7 +64,7 @@ class StateView:
     omega: float
     phi_td: float
     w: float          # weight on bit over the last step (stick reaction included)
-    t: float          # torque on bit over the last step
+    t: float          # torque on bit over the last step (a stick's reaction included)
     ts: float         # string (surface) torque phi_td - phi
     delta_n: float    # depth of cut per blade
     g: float          # wear-flat contact factor
@@ -61,7 +82,11 @@ class StateView:
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Sampled outputs of a run (dimensionless), one array per MODEL.md quantity."""
+    """Sampled outputs of a run (dimensionless), one array per quantity of the model contract.
+
+    w and t are means over each row's output interval (impulses of sticks and landings spread
+    over the interval, as a sensor would see them); everything else is the value at the row.
+    """
 
     tau: np.ndarray
     u: np.ndarray
@@ -106,6 +131,12 @@ class Simulator:
                  hoist_speed_limit: float = math.inf, nodes: int | None = None) -> None:
         self.groups = groups
         self.dt = check_number("dt", dt, high=0.05)
+        if self.dt > max_step(groups) * (1.0 + 1e-12):
+            raise ParameterError(
+                f"dt = {self.dt:g} t* cannot resolve the fastest mode: its period is "
+                f"{fastest_period(groups):.4g} t* (axial 2 pi/sqrt(n psi) with n psi = "
+                f"{groups.n * groups.psi:g}; torsional 2 pi); expected dt <= "
+                f"{max_step(groups):.4g} t*, {STEPS_PER_PERIOD} steps a period")
         self.stick_window = check_number("stick_window", stick_window)
         nodes = surface_nodes(groups, self.dt) if nodes is None else int(nodes)
         if nodes < 4 or nodes & (nodes - 1) or nodes > MAX_NODES:
@@ -125,7 +156,7 @@ class Simulator:
 
     # ---- initial conditions -------------------------------------------------------------
     def start_steady(self, w0: float, omega0: float, perturbation: float = 0.0) -> None:
-        """The exact steady start of MODEL.md section 4; omega scaled by (1 + perturbation)."""
+        """The exact steady start (model contract, section 4); omega scaled by 1 + perturbation."""
         perturbation = check_number("perturbation", perturbation, low=-1.0)
         st = steady_state(self.groups, w0, omega0)
         self.set_commands(w0, omega0)
@@ -144,7 +175,7 @@ class Simulator:
         self._x[kn.X_T] = self._x[kn.X_TS] = st.t0
         self._x[kn.X_DELTA] = st.delta_n0
         self._x[kn.X_G] = 1.0
-        self._k[:] = (0, kn.REGIME_ROTATING, 0)
+        self._k[:] = (0, kn.REGIME_ROTATING, 0, 0, 0)
         self.reset_window()
 
     def start_at_rest(self, gap: float = 0.0) -> None:
@@ -155,38 +186,56 @@ class Simulator:
         self._x[:] = 0.0
         self._x[kn.X_U] = -gap
         self._x[kn.X_SINCE_STICK] = math.inf
-        self._k[:] = (0, kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK, 0)
+        self._k[:] = (0, kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK, 0, 0, 0)
         self.reset_window()
 
     def load_state(self, *, tau: float, steps: int, u: float, v: float, phi: float, omega: float,
                    phi_td: float, surface: np.ndarray, regime: int, since_stick: float,
-                   w: float = 0.0, t: float = 0.0, delta_n: float = 0.0, g: float = 0.0) -> None:
-        """Put the bit, string and rock in a given state (dimensionless); ``surface`` is S over
-        one sector at any even spacing and is resampled onto this simulator's nodes; w, t,
-        delta_n and g are what the last step's outputs read until the next step."""
+                   w: float = 0.0, t: float = 0.0, delta_n: float = 0.0, g: float = 0.0,
+                   surface_behind: float | None = None) -> None:
+        """Put the bit, string and rock in a given state (dimensionless).
+
+        ``surface`` is S over one sector at any even spacing (node 0 at the sector's start), as
+        ``surface`` reads it, and is resampled onto this simulator's nodes. The blades' current
+        pass has already cut the last node they passed (the node at or below phi); its value
+        from before the pass, which the next depth of cut is measured against, is
+        ``surface_behind`` (as ``surface_behind`` reads it; None: the given value, i.e. that
+        node was not cut by the current pass). w, t, delta_n and g are what the last step's
+        outputs read until the next step; the force sums of the next sample start from here.
+        """
         values = np.array([tau, u, v, phi, omega, phi_td, since_stick], dtype=float)
         if not np.all(np.isfinite(values[:6])) or not np.all(np.isfinite(surface)):
             raise ParameterError("load_state: the state must be finite")
-        nodes = self._surf.size
+        self.take_force_sums()            # the window keeps the steps before the load
         src = np.asarray(surface, dtype=float)
+        before = src.copy()               # the surface as the current pass found it
+        if surface_behind is not None:
+            before[math.floor(phi * src.size * self.groups.n / (2.0 * math.pi)) % src.size] = \
+                check_number("surface_behind", surface_behind, low=None)
+        nodes = self._surf.size
         x_src = np.arange(src.size + 1) / src.size
         x_dst = np.arange(nodes) / nodes
         self._surf[:] = np.interp(x_dst, x_src, np.append(src, src[0]))
         k_last = math.floor(phi * self._p[kn.P_INV_DTHETA])
+        k_node = k_last & (nodes - 1)
         x = self._x
         x[kn.X_TAU], x[kn.X_U], x[kn.X_V], x[kn.X_PHI], x[kn.X_OMEGA], x[kn.X_PHI_TD] = values[:6]
         x[kn.X_SINCE_STICK] = since_stick
         x[kn.X_HOLE] = float(self._surf.max())
         x[kn.X_TS] = phi_td - phi
         x[kn.X_W], x[kn.X_T], x[kn.X_DELTA], x[kn.X_G] = w, t, delta_n, g
-        x[kn.X_S_BEHIND] = self._surf[k_last & (nodes - 1)]
-        self._k[:] = (k_last, regime, steps)
+        x[kn.X_S_BEHIND] = float(np.interp(x_dst[k_node], x_src, np.append(before, before[0])))
+        x[kn.X_SUM_W] = x[kn.X_SUM_T] = 0.0
+        self._k[:] = (k_last, regime, steps, steps, 0)
 
     # ---- commands -----------------------------------------------------------------------
     def set_commands(self, w0: float, omega0: float) -> None:
-        """Available weight w0 = W0/F* (any sign) and top-drive speed omega0 >= 0, held from now."""
+        """Available weight w0 = W0/F* (any sign) and top-drive speed omega0 >= 0, held from now.
+
+        A speed that would turn the bit more than a sector 2 pi/n in one step is refused."""
         w0 = check_number("w0", w0, low=None)
-        omega0 = check_number("omega0", omega0, low_inclusive=True)
+        omega0 = check_number("omega0", omega0, low_inclusive=True,
+                              high=2.0 * math.pi / self.groups.n / self.dt)
         self._c[kn.C_W0], self._c[kn.C_OMEGA0] = w0, omega0   # both valid, or neither set
 
     def set_hoist_speed_limit(self, limit: float) -> None:
@@ -201,14 +250,37 @@ class Simulator:
 
     # ---- stepping -----------------------------------------------------------------------
     def advance(self, n_steps: int) -> None:
-        """Advance ``n_steps`` steps with the commands held; allocation-free."""
+        """Advance ``n_steps`` steps with the commands held; allocation-free.
+
+        Raises ParameterError, the state left after the last step taken, before a step that
+        would turn the bit more than a sector (see ``kernel.advance``)."""
         kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc, n_steps,
                    self._no_rows, 1, 0)
+        if self._k[kn.K_REFUSED]:
+            self._refuse_step()
+
+    def _refuse_step(self) -> None:
+        sector = 2.0 * math.pi / self.groups.n
+        raise ParameterError(
+            f"at tau = {self.tau:.6g} the next step (dt = {self.dt:g}) would turn the bit more "
+            f"than a sector 2 pi/n = {sector:.4g} rad, from bit speed {self._x[kn.X_OMEGA]:.4g}: "
+            "the rock surface cannot be swept nor the depth of cut measured; use a smaller dt "
+            "or less weight on bit (the string winds up to about w0, and the bit slips at "
+            "about that speed); the state is kept at the last step")
 
     def advance_into(self, n_steps: int, out: np.ndarray, every: int, row: int) -> int:
-        """Advance and write a row to ``out`` every ``every`` steps; return the next free row."""
-        return int(kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
-                              n_steps, out, every, row))
+        """Advance and write a row to ``out`` at every step count that is a multiple of ``every``;
+        return the next free row. A row is a sample: its w and t are the means over the steps
+        since the previous sample (a row, ``take_force_sums``, ``start_sample``, a start)."""
+        row = int(kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
+                             n_steps, out, every, row))
+        if self._k[kn.K_REFUSED]:
+            self._refuse_step()
+        return row
+
+    def start_sample(self) -> None:
+        """The next sample's (row's) w and t average over the steps from now on."""
+        self.take_force_sums()
 
     def run(self, duration: float, *, output_interval: float | None = None,
             schedule: Callable[[float], tuple[float, float]] | None = None,
@@ -217,7 +289,10 @@ class Simulator:
         """Advance by ``duration`` [t*] recording rows every ``output_interval`` [t*] (None: none).
 
         ``schedule(tau) -> (w0, omega0)`` is applied every ``schedule_interval`` [t*] (zero-order
-        hold); ``progress(fraction)`` is called between chunks.
+        hold); ``progress(fraction)`` is called between chunks. Each row's w and t are the means
+        over its output interval (the first row's: since the run started), as a sensor sampled
+        at that interval would report the impulse of a stick or a landing; with
+        ``output_interval = dt`` they are the per-step values. A run starts a new sample.
         """
         duration = check_number("duration", duration)
         n_total = round(duration / self.dt)
@@ -229,6 +304,7 @@ class Simulator:
         chunk = n_total if schedule is None else max(1, round(schedule_interval / self.dt))
         chunk = min(chunk, 2_000_000) if progress is not None else chunk
         row, done = 0, 0
+        self.start_sample()
         while done < n_total:
             if schedule is not None:
                 self.set_commands(*schedule(self.tau))
@@ -266,9 +342,22 @@ class Simulator:
                          ts=x[kn.X_TS], delta_n=x[kn.X_DELTA], g=x[kn.X_G],
                          regime=int(k[kn.K_REGIME]), since_stick=x[kn.X_SINCE_STICK])
 
+    def take_force_sums(self) -> tuple[float, float, int]:
+        """(sum of w, sum of t, steps) over the steps since the previous sample (a call, an
+        output row, a start or ``load_state``), and start the next: a sample's mean WOB and TOB
+        are the sums over the steps (see ``Rig.sample``)."""
+        x, k, acc, h = self._x, self._k, self._acc, self.dt
+        sums = (float(x[kn.X_SUM_W]), float(x[kn.X_SUM_T]), int(k[kn.K_STEPS] - k[kn.K_SAMPLED]))
+        acc[kn.A_W] += h * sums[0]              # the window's integrals take the sample in
+        acc[kn.A_T] += h * sums[1]
+        x[kn.X_SUM_W] = x[kn.X_SUM_T] = 0.0
+        k[kn.K_SAMPLED] = k[kn.K_STEPS]
+        return sums
+
     @property
     def stick_slip(self) -> bool:
-        """The flag of MODEL.md section 7: a stick phase within the last ``stick_window``."""
+        """The stick-slip flag (model contract, section 7): a stick within the last
+        ``stick_window``."""
         return bool(self._x[kn.X_SINCE_STICK] < self.stick_window)
 
     @property
@@ -278,15 +367,26 @@ class Simulator:
 
     @property
     def surface(self) -> np.ndarray:
-        """A copy of the rock surface S over one sector [L*]."""
+        """A copy of the rock surface S over one sector [L*], the current pass included."""
         return self._surf.copy()
+
+    @property
+    def surface_behind(self) -> float:
+        """S at the last node the blades passed, from before the current pass [L*]: what the
+        next depth of cut is measured against there (``load_state`` takes it back)."""
+        return float(self._x[kn.X_S_BEHIND])
 
     def reset_window(self) -> None:
         """Start a new metrics window now."""
         self._acc[:] = 0.0
         self._acc[kn.A_OMEGA_MIN] = math.inf
         self._acc[kn.A_OMEGA_MAX] = -math.inf
+        self._acc[kn.A_W] = -self.dt * self._x[kn.X_SUM_W]   # the pending sample's steps are
+        self._acc[kn.A_T] = -self.dt * self._x[kn.X_SUM_T]   # before the window
 
     def window_metrics(self) -> Metrics:
-        """Metrics of MODEL.md section 7 over the window since the last ``reset_window``."""
-        return Metrics.from_accumulators(self._acc)
+        """Metrics (model contract, section 7) over the window since the last ``reset_window``."""
+        acc = self._acc.copy()
+        acc[kn.A_W] += self.dt * self._x[kn.X_SUM_W]
+        acc[kn.A_T] += self.dt * self._x[kn.X_SUM_T]
+        return Metrics.from_accumulators(acc)

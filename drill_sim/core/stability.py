@@ -1,4 +1,5 @@
-"""Steady drilling (MODEL.md section 4) and the roots of its characteristic function (section 5).
+"""Steady drilling (model contract, section 4) and the roots of its characteristic function
+(section 5).
 
 Root finding: every root of Delta(s) with Re s >= re_min lies in the disc |s| <= R, with R from
 the bound |s|^4 <= |s|^2 (1 + (n psi + k) e_max) + n psi e_max, e_max = 1 + exp(-re_min tau_n0).
@@ -6,7 +7,8 @@ The box [re_min, R] x [-R, R] therefore holds them all. Newton's method is start
 over the box, the distinct converged roots are kept, and their number is checked against the
 argument principle (the winding number of Delta along the box edge, sampled until no step turns
 the phase by more than pi/4). A mismatch refines the grid; the result says whether the counts
-agreed, so a caller knows none were missed.
+agreed, so a caller knows none were missed. A box expected to hold more than MAX_ROOTS roots
+(a re_min far left, or a long delay at low speed) is refused with the re_min or speed that works.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ class NoSteadyDrilling(ValueError):
 
 @dataclass(frozen=True)
 class SteadyState:
-    """The trivial solution, dimensionless (MODEL.md section 4)."""
+    """The trivial solution, dimensionless (model contract, section 4)."""
 
     w0: float
     omega0: float
@@ -85,15 +87,70 @@ class StabilityResult:
         return complex(self.roots[0])
 
 
-def stability(groups: Groups, w0: float, omega0: float, *, re_min: float = -0.5) -> StabilityResult:
-    """All roots of Delta(s) with Re s >= re_min, found and counted as the module doc says."""
-    steady = steady_state(groups, w0, omega0)
-    re_min = check_number("re_min", re_min, low=None, high=-1e-6)
+MAX_ROOTS = 150     # the most roots a search box may be expected to hold (~5 s of search)
+
+
+def _radius(groups: Groups, steady: SteadyState, re_min: float) -> float:
+    """R: every root with Re s >= re_min has |s| <= R (inf when exp(-re_min tau) overflows)."""
+    x = -re_min * steady.tau_n0
+    e_max = 1.0 + math.exp(x) if x < 700.0 else math.inf
     k = groups.n * (steady.w0 - groups.lam) / (2.0 * math.pi)
-    e_max = 1.0 + math.exp(-re_min * steady.tau_n0)
     a = 1.0 + (groups.n * groups.psi + abs(k)) * e_max
     b = groups.n * groups.psi * e_max
-    radius = 1.05 * math.sqrt(0.5 * (a + math.sqrt(a * a + 4.0 * b)))
+    return 1.05 * math.sqrt(0.5 * (a + math.sqrt(a * a + 4.0 * b)))
+
+
+def _expected_roots(groups: Groups, steady: SteadyState, re_min: float) -> float:
+    """About how many roots the box holds: the delay spaces them 2 pi/tau_n0 apart along
+    each of its 2R-long vertical lines (two families), so about R tau_n0/pi (checked
+    against the winding number from 7 to 1850 roots)."""
+    return _radius(groups, steady, re_min) * steady.tau_n0 / math.pi
+
+
+def _three_digits(x: float, rounding) -> float:
+    """x to three significant digits, rounded by ``rounding`` (math.trunc, math.ceil)."""
+    scale = 10.0 ** (2 - math.floor(math.log10(abs(x))))
+    return rounding(x * scale) / scale
+
+
+def _check_box(groups: Groups, steady: SteadyState, re_min: float) -> None:
+    """Refuse a search whose box would hold more than MAX_ROOTS roots, saying what works."""
+    if _expected_roots(groups, steady, re_min) <= MAX_ROOTS:
+        return
+    tau = steady.tau_n0
+    if _expected_roots(groups, steady, -1e-6) > MAX_ROOTS:
+        lo, hi = math.log(steady.omega0), math.log(1e3)     # bisect for the lowest speed
+        for _ in range(100):
+            mid = 0.5 * (lo + hi)
+            at = steady_state(groups, steady.w0, math.exp(mid))
+            lo, hi = (mid, hi) if _expected_roots(groups, at, -1e-3) > MAX_ROOTS else (lo, mid)
+        lowest = _three_digits(math.exp(hi), math.ceil)
+        raise ParameterError(
+            f"stability: omega0 = {steady.omega0:g} is too low for the root search: the delay "
+            f"tau_n0 = 2 pi/(n omega0) = {tau:.4g} t* packs more than {MAX_ROOTS} roots into any "
+            f"box that holds the unstable ones; the search works for omega0 >= {lowest:g} "
+            "at this weight, with re_min = -0.001")
+    lo, hi = max(re_min, -700.0 / tau), -1e-6  # bisect for the widest box allowed
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _expected_roots(groups, steady, mid) > MAX_ROOTS else (lo, mid)
+    raise ParameterError(
+        f"stability: re_min = {re_min:g} at omega0 = {steady.omega0:g} asks for a box of "
+        f"radius {_radius(groups, steady, re_min):.3g} holding about "
+        f"{_expected_roots(groups, steady, re_min):.3g} roots (exp(-re_min tau_n0) with "
+        f"tau_n0 = {tau:.4g} t*); the search is made for at most {MAX_ROOTS}: use "
+        f"re_min >= {_three_digits(hi, math.trunc):g}")
+
+
+def stability(groups: Groups, w0: float, omega0: float, *, re_min: float = -0.5) -> StabilityResult:
+    """All roots of Delta(s) with Re s >= re_min, found and counted as the module doc says.
+
+    Refused (ParameterError, saying what works) when the box would hold more than MAX_ROOTS
+    roots: a re_min far left of 0, or a very low omega0 (a long delay packs the roots)."""
+    steady = steady_state(groups, w0, omega0)
+    re_min = check_number("re_min", re_min, low=None, high=-1e-6)
+    _check_box(groups, steady, re_min)
+    radius = _radius(groups, steady, re_min)
     box = (re_min, radius, -radius, radius)
     count = _winding_number(box, groups, steady)
     roots = np.empty(0, dtype=complex)
@@ -128,14 +185,14 @@ def _newton_from_grid(box, groups: Groups, steady: SteadyState, density: int) ->
     re = np.linspace(x0, x1, density)
     im = np.linspace(y0, y1, 2 * density)
     s = (re[None, :] + 1j * im[:, None]).ravel()
-    for _ in range(60):
-        value, deriv = characteristic(s, groups, steady)
-        with np.errstate(all="ignore"):
+    with np.errstate(all="ignore"):            # iterates that leave the box become NaN
+        for _ in range(60):
+            value, deriv = characteristic(s, groups, steady)
             step = value / deriv
-        step[~np.isfinite(step)] = 0.0
-        s = s - step
-        s = np.where(np.abs(s) > 4.0 * max(abs(x0), x1, y1), np.nan, s)
-    value, deriv = characteristic(s, groups, steady)
+            step[~np.isfinite(step)] = 0.0
+            s = s - step
+            s = np.where(np.abs(s) > 4.0 * max(abs(x0), x1, y1), np.nan, s)
+        value, deriv = characteristic(s, groups, steady)
     good = np.isfinite(s) & (np.abs(value) <= 1e-9 * (1.0 + np.abs(s) ** 4))
     good &= (s.real >= x0) & (s.real <= x1) & (s.imag >= y0) & (s.imag <= y1)
     found: list[complex] = []

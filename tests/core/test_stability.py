@@ -1,4 +1,4 @@
-"""Steady drilling (MODEL.md section 4) and the roots of Delta(s) (section 5)."""
+"""Steady drilling (model contract, section 4) and the roots of Delta(s) (section 5)."""
 
 from __future__ import annotations
 
@@ -78,3 +78,61 @@ def test_torsional_root_tends_to_i_as_the_chip_coupling_vanishes():
     g = Groups(4, 13.73, 6.84, 0.36)
     res = stability(g, g.lam + 1e-6, 1.32)
     assert np.min(np.abs(res.roots - 1j)) < 1e-5
+
+
+# ---- a second, independent method ------------------------------------------------------------
+# Delta written out again from the model contract (section 5), and roots located by contour
+# integrals (Delves-Lyness): on a circle C holding exactly one root r,
+#     (1/2 pi i) oint_C Delta'/Delta ds = 1    and    (1/2 pi i) oint_C s Delta'/Delta ds = r,
+# computed with the trapezoidal rule in the angle (exponentially accurate for a periodic analytic
+# integrand) and Delta' by central differences. Neither Newton's method nor the code's Delta is
+# used, so a wrong root, a wrong Delta or a missed root would show.
+
+def _delta(s, groups: Groups, w0: float, omega0: float):
+    n, psi, lam = groups.n, groups.psi, groups.lam
+    e = 1.0 - np.exp(-s * 2.0 * math.pi / (n * omega0))
+    return (s * s + 1.0) * (s * s + n * psi * e) - n * (w0 - lam) / (2.0 * math.pi) * s * s * e
+
+
+def _contour_moments(center: complex, radius: float, f) -> tuple[complex, complex]:
+    theta = np.linspace(0.0, 2.0 * math.pi, 4096, endpoint=False)
+    ds = 1j * radius * np.exp(1j * theta)                  # ds/dtheta
+    s = center + radius * np.exp(1j * theta)
+    eps = 1e-6 * (1.0 + abs(center))
+    log_derivative = (f(s + eps) - f(s - eps)) / (2.0 * eps) / f(s)
+    weights = log_derivative * ds / (2j * math.pi) * (2.0 * math.pi / theta.size)
+    return np.sum(weights), np.sum(weights * s)
+
+
+def _zeros_in_box(x0: float, x1: float, y: float, f, points: int = 200_000) -> int:
+    """Zeros of f in [x0, x1] x [-y, y] by the change of arg f along the edge."""
+    corners = [complex(x0, -y), complex(x1, -y), complex(x1, y), complex(x0, y), complex(x0, -y)]
+    path = np.concatenate([np.linspace(corners[i], corners[i + 1], points, endpoint=False)
+                           for i in range(4)] + [np.array([corners[0]])])
+    turns = np.diff(np.unwrap(np.angle(f(path))))
+    assert np.max(np.abs(turns)) < 0.5                       # sampled finely enough
+    return round(np.sum(turns) / (2.0 * math.pi))
+
+
+@pytest.mark.parametrize("groups, w0, omega0", POINTS)
+def test_rightmost_root_by_an_independent_method(groups, w0, omega0):
+    """The rightmost root from contour moments, and no root right of it: for Re s >= x >= 0,
+    |E| <= 1 + e^{-x tau} <= 2, so Delta = 0 needs |s|^4 <= |s|^2 (1 + 2 (n psi + |k|)) + 2 n psi
+    (every other term bounded by the triangle inequality): all such roots have |s| <= R with
+    R^2 = (A + sqrt(A^2 + 8 n psi))/2, A = 1 + 2 (n psi + |k|)."""
+    res = stability(groups, w0, omega0)
+    r = res.rightmost
+
+    def f(s):
+        return _delta(s, groups, w0, omega0)
+
+    count, location = _contour_moments(r, 0.05, f)
+    assert abs(count - 1.0) < 1e-8
+    assert abs(location - r) < 1e-8 * (1 + abs(r))
+    k = groups.n * (w0 - groups.lam) / (2 * math.pi)
+    a = 1 + 2 * (groups.n * groups.psi + abs(k))
+    big = 1.01 * math.sqrt((a + math.sqrt(a * a + 8 * groups.n * groups.psi)) / 2)
+    # nothing right of the rightmost root (its conjugate pair lies on the edge's left)
+    assert _zeros_in_box(r.real + 1e-3, big, big, f) == 0
+    # and the unstable roots it lists (Re s > 0) are all there is
+    assert _zeros_in_box(1e-3, big, big, f) == np.count_nonzero(res.roots.real > 1e-3)
