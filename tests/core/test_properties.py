@@ -41,7 +41,11 @@ def test_random_parameters_and_commands(groups, commands, start_steady, gap):
         assert np.all(tr.w >= 0.0)                          # the rock only pushes
         assert np.all(sim.surface >= before)                # the hole never fills in
         assert sim.hole_bottom == pytest.approx(max(sim.surface.max(), 0.0))
-        assert np.all(tr.v[tr.stuck & (tr.w > 0)] == 0.0)   # a stuck bit resting on rock is still
+        # a stuck bit never moves down (it may coast up: the one-way hold); rows carry the mean
+        # force over their interval, so "resting on rock" is checked on the step's own state
+        assert np.all(tr.v[tr.stuck] <= 0.0)
+        end = sim.state()
+        assert not (end.stuck and end.w > 0.0) or end.v == 0.0   # resting on rock: still
     assert id(sim._surf) == surface_id and sim._surf.size == size
 
 
