@@ -18,12 +18,10 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from mcap.reader import SeekingReader
-from mcap.summary import Summary
-
 from .bag_info import BagInfo, TopicInfo, count_by_walking, count_from_summary
 from .errors import BagError
 from .mcap_scan import MappedFile, McapScan, what_it_is
+from .mcap_summary import FileSummary
 from .metadata import read_metadata_yaml
 from .verify import damage
 
@@ -43,7 +41,7 @@ class BagMessage:
 class _Summary:
     """A file's summary section and metadata records; None where absent or damaged."""
 
-    summary: Summary | None
+    summary: FileSummary | None
     metadata: dict[str, dict[str, str]] | None
 
 
@@ -115,7 +113,7 @@ class Bag:
         for file in self.files:
             yield McapScan(self.mapped(file), problems)
 
-    def summary(self, file: Path) -> Summary | None:
+    def summary(self, file: Path) -> FileSummary | None:
         """The file's summary section, or None if it has none (a crashed file) or it is bad."""
         return self._summary(file).summary
 
@@ -123,11 +121,10 @@ class Bag:
         if file not in self._summaries:
             found = _Summary(None, None)
             try:
-                reader = SeekingReader(self.mapped(file).file, validate_crcs=True)
-                found.summary = reader.get_summary()
+                found.summary = self.mapped(file).summary
                 if found.summary is not None and found.summary.statistics is not None:
-                    found.metadata = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
-            except Exception:               # any damage: the caller reads the file itself
+                    found.metadata = found.summary.metadata()
+            except (OSError, ValueError):       # any damage: the caller reads the file itself
                 pass
             self._summaries[file] = found
         return self._summaries[file]

@@ -9,11 +9,9 @@ import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mcap.summary import Summary
-
 from ..wire.rig_topics import JOINT_STATES
 from .mcap_scan import MESSAGE_FIELDS, RECORD_HEAD, MappedFile, McapScan
-from .mcap_summary import message_index_at
+from .mcap_summary import FileSummary, message_index_at
 
 _STAMP = struct.Struct("<iI")                     # a message's header stamp, after CDR's head
 
@@ -52,7 +50,7 @@ class BagInfo:
         return 0.0 if self.start_ns is None else (self.end_ns - self.start_ns) * 1e-9
 
 
-def count_from_summary(mapped: MappedFile, summary: Summary,
+def count_from_summary(mapped: MappedFile, summary: FileSummary,
                        metadata: dict[str, dict[str, str]], result: BagInfo) -> None:
     """Topics, counts, time span and metadata of a file from its sound summary; the rig's
     header stamps through its chunk indexes (``_stamps_from_index``)."""
@@ -74,10 +72,12 @@ def count_from_summary(mapped: MappedFile, summary: Summary,
 def _stamps_from_index(mapped: MappedFile, cid: int, topic: str, result: BagInfo) -> None:
     """The first and last header stamps of channel ``cid``, through the summary's chunk
     indexes (two chunks decompressed)."""
-    entries = [] if mapped.summary is None else [
-        c for c in mapped.summary.chunk_indexes if cid in c.message_index_offsets]
+    first = last = None
+    for c in [] if mapped.summary is None else mapped.summary.chunk_indexes():
+        if cid in c.message_index_offsets:
+            first, last = first or c, c
     scan = McapScan(mapped, [])
-    for entry, pick in ((entries[:1], 1), (entries[-1:], -1)):
+    for entry, pick in (([first] if first else [], 1), ([last] if last else [], -1)):
         if not entry:
             continue
         found = message_index_at(mapped.view, entry[0].message_index_offsets[cid])

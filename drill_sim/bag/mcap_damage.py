@@ -52,7 +52,7 @@ def chunk_loss(view: memoryview, summary: FileSummary | None, record_at: int,
     """What the chunk record at ``record_at`` (its body ending at ``end``) held."""
     lost = Lost(chunks=1)
     entry = None if summary is None else next(
-        (c for c in summary.chunk_indexes if c.chunk_start_offset == record_at), None)
+        (c for c in summary.chunk_indexes() if c.chunk_start_offset == record_at), None)
     if entry is not None:
         _from_entries(view, [entry], lost)
     else:

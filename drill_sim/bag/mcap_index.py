@@ -18,7 +18,6 @@ from typing import TypeVar
 
 import numpy as np
 import zstandard
-from numpy.lib.stride_tricks import as_strided
 
 from .mcap_scan import (
     MESSAGE_FIELDS,
@@ -201,7 +200,7 @@ def _cut(chunk: np.ndarray, offsets: np.ndarray) -> np.ndarray | None:
     if o[0] < 0 or o[-1] + _MESSAGE_HEAD > chunk.size:
         return None
     if regular:
-        lengths = as_strided(chunk[o[0] + 1:], shape=(o.size, 8), strides=(stride, 1))
+        lengths = _strided(chunk, o[0] + 1, o.size, 8, stride)
     else:
         lengths = chunk[o[:, None] + np.arange(1, 9)]
     lengths = lengths.copy().view("<u8")[:, 0]
@@ -209,6 +208,13 @@ def _cut(chunk: np.ndarray, offsets: np.ndarray) -> np.ndarray | None:
         return None
     size = int(lengths[0]) - MESSAGE_FIELDS.size
     if regular:
-        return as_strided(chunk[o[0] + _MESSAGE_HEAD:], shape=(o.size, size),
-                          strides=(stride, 1)).copy()
+        return _strided(chunk, o[0] + _MESSAGE_HEAD, o.size, size, stride).copy()
     return chunk[o[:, None] + _MESSAGE_HEAD + np.arange(size)]
+
+
+def _strided(chunk: np.ndarray, start: int, rows: int, size: int, stride: int) -> np.ndarray:
+    """Rows of ``size`` bytes every ``stride`` bytes from ``start``, as a view. (numpy's
+    ``as_strided`` goes through ``__array_interface__``, which grows a cache of its own by
+    megabytes over millions of calls.)"""
+    return np.ndarray((rows, size), np.uint8, buffer=chunk, offset=int(start),
+                      strides=(stride, 1))

@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import struct
 import zlib
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 from mcap.opcode import Opcode
-from mcap.records import Channel, ChunkIndex, Schema, Statistics
+from mcap.records import Channel, ChunkIndex, Metadata, MetadataIndex, Schema, Statistics
 from mcap.writer import MCAP0_MAGIC as MAGIC
 
 from .mcap_records import RECORD_HEAD, RecordBody
@@ -26,18 +27,44 @@ _INDEX_HEAD = struct.Struct("<HI")                # a message index: channel, en
 
 @dataclass
 class FileSummary:
-    """A sound summary section (its CRC checked) and the footer that points at it."""
+    """A sound summary section (its CRC checked) and the footer that points at it. Schemas,
+    channels, statistics and the metadata index are read at once; the chunk indexes (one per
+    chunk, so as many as the file is long) are read when asked for, and not kept."""
 
+    view: memoryview
     summary_start: int
+    summary_end: int
     schemas: dict[int, Schema] = field(default_factory=dict)
     channels: dict[int, Channel] = field(default_factory=dict)
     statistics: Statistics | None = None
-    chunk_indexes: list[ChunkIndex] = field(default_factory=list)
+    metadata_indexes: list[MetadataIndex] = field(default_factory=list)
+
+    def chunk_indexes(self) -> Iterator[ChunkIndex]:
+        """The chunk index records, in file order."""
+        for op, body in _records(self.view, self.summary_start, self.summary_end):
+            if op == Opcode.CHUNK_INDEX:
+                yield ChunkIndex.read(RecordBody(body))
 
     def chunks_in(self, start: int, end: int | None) -> list[ChunkIndex]:
         """The chunks whose records start in bytes [start, end) (end None: to the end)."""
-        return [c for c in self.chunk_indexes if start <= c.chunk_start_offset
+        return [c for c in self.chunk_indexes() if start <= c.chunk_start_offset
                 and (end is None or c.chunk_start_offset < end)]
+
+    def metadata(self) -> dict[str, dict[str, str]]:
+        """The metadata records the index points at (name -> {key: value}); one that is not
+        where the index says is left out."""
+        found = {}
+        for entry in self.metadata_indexes:
+            at, end = entry.offset, entry.offset + entry.length
+            if end > len(self.view) or RECORD_HEAD.unpack_from(self.view, at)[0] \
+                    != Opcode.METADATA:
+                continue
+            try:
+                record = Metadata.read(RecordBody(self.view[at + RECORD_HEAD.size:end]))
+            except (struct.error, ValueError):
+                continue
+            found[record.name] = dict(record.metadata)
+        return found
 
 
 def read_summary(view: memoryview) -> FileSummary | None:
@@ -51,19 +78,13 @@ def read_summary(view: memoryview) -> FileSummary | None:
     if op != Opcode.FOOTER or length != _FOOTER.size:
         return None
     start, _, crc = _FOOTER.unpack_from(view, footer_at + RECORD_HEAD.size)
-    if not len(MAGIC) <= start <= footer_at:
+    if not len(MAGIC) <= start < footer_at:
         return None
     if crc and zlib.crc32(view[start:footer_at + RECORD_HEAD.size + 16]) != crc:
         return None
-    found = FileSummary(start)
-    pos = start
+    found = FileSummary(view, start, footer_at)
     try:
-        while pos < footer_at:
-            op, length = RECORD_HEAD.unpack_from(view, pos)
-            body = view[pos + RECORD_HEAD.size:pos + RECORD_HEAD.size + length]
-            pos += RECORD_HEAD.size + length
-            if pos > footer_at:
-                return None
+        for op, body in _records(view, start, footer_at):
             if op == Opcode.SCHEMA:
                 schema = Schema.read(RecordBody(body))
                 schema.data = bytes(schema.data)
@@ -73,11 +94,23 @@ def read_summary(view: memoryview) -> FileSummary | None:
                 found.channels[channel.id] = channel
             elif op == Opcode.STATISTICS:
                 found.statistics = Statistics.read(RecordBody(body))
-            elif op == Opcode.CHUNK_INDEX:
-                found.chunk_indexes.append(ChunkIndex.read(RecordBody(body)))
+            elif op == Opcode.METADATA_INDEX:
+                found.metadata_indexes.append(MetadataIndex.read(RecordBody(body)))
     except (struct.error, ValueError):
         return None
     return found
+
+
+def _records(view: memoryview, start: int, end: int) -> Iterator[tuple[int, memoryview]]:
+    """(opcode, body) of the records in [start, end); ValueError where one runs past it."""
+    pos = start
+    while pos < end:
+        op, length = RECORD_HEAD.unpack_from(view, pos)
+        body_end = pos + RECORD_HEAD.size + length
+        if body_end > end:
+            raise ValueError("a summary record runs past the summary")
+        yield op, view[pos + RECORD_HEAD.size:body_end]
+        pos = body_end
 
 
 def message_index_at(view: memoryview, pos: int) -> tuple[int, memoryview, int] | None:
