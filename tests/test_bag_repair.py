@@ -187,3 +187,22 @@ def test_a_repaired_crash_is_sound_with_a_note(tmp_path):
     repaired = reader.repair(bag)
     assert repaired.message_count == kept and not repaired.problems
     assert any("was repaired" in n for n in repaired.notes)
+
+
+def test_repair_of_a_split_bag_rewrites_only_the_damaged_file(tmp_path):
+    from test_bag import _write
+
+    bag = tmp_path / "split"
+    _write(bag, n=3000, split_duration_s=10.0, chunk_size=8192)
+    files = sorted(bag.glob("*.mcap"))
+    assert len(files) == 3
+    before = {f.name: f.read_bytes() for f in files}
+    lost = _flip_chunk(files[1], 2)
+    repaired = reader.repair(bag)
+    assert repaired.message_count == 6300 - lost
+    after = _snapshot(bag)
+    assert after["split_0.mcap"] == before["split_0.mcap"]
+    assert after["split_2.mcap"] == before["split_2.mcap"]
+    assert "split_0.mcap.damaged" not in after and "split_1.mcap.damaged" in after
+    with Reader(bag) as r:
+        assert r.message_count == 6300 - lost
