@@ -170,3 +170,20 @@ def test_what_is_not_mcap_is_refused_in_one_line(tmp_path, capsys, content, expe
     assert main(["bag", "info", str(junk)]) == 2
     err = capsys.readouterr().err
     assert "not an MCAP file" in err and expected in err and len(err.splitlines()) == 1
+
+
+def test_a_loss_whose_indexes_are_damaged_too_is_counted_as_at_least(tmp_path):
+    """Two chunks and the message indexes between them zeroed: the first chunk's count is
+    gone with its indexes, so the report gives a lower bound, never a wrong total."""
+    bag, path, _ = _bag(tmp_path)
+    everything = _messages(bag)
+    chunks = _chunks(path)
+    (a, _, lost_a), (_, b, lost_b) = chunks[2], chunks[3]
+    _edit(path, lambda data: data.__setitem__(slice(a, b), bytes(b - a)))
+    problems: list[str] = []
+    got = _messages(bag, problems)
+    before = chunks[0][2] + chunks[1][2]
+    assert got == everything[:before] + everything[before + lost_a + lost_b:]
+    assert len(problems) == 1
+    assert f"at least {lost_b} messages lost in 2 chunks" in problems[0]
+    assert "indexes of 1 of these chunks are damaged too" in problems[0]

@@ -30,6 +30,7 @@ class Lost:
     first_ns: int | None = None
     last_ns: int | None = None
     chunks: int = 0
+    uncounted: int = 0                    # chunks whose message indexes are damaged too
 
     @property
     def messages(self) -> int | None:
@@ -83,10 +84,12 @@ def _from_entries(view: memoryview, entries: list[ChunkIndex], lost: Lost) -> No
     lost.counts = {} if lost.counts is None else lost.counts
     for entry in entries:
         lost.span(entry.message_start_time, entry.message_end_time)
-        for offset in entry.message_index_offsets.values():
-            found = message_index_at(view, offset)
+        indexes = [message_index_at(view, offset)
+                   for offset in entry.message_index_offsets.values()]
+        for found in indexes:
             if found is not None:
                 lost.add_index(*found[:2])
+        lost.uncounted += any(found is None for found in indexes)
 
 
 def describe(lost: Lost, channels: Channels, origin_ns: int | None, after_ns: int | None,
@@ -101,7 +104,12 @@ def describe(lost: Lost, channels: Channels, origin_ns: int | None, after_ns: in
     else:
         topics = ", ".join(f"{channels.topic(c)} {k}" for c, k in sorted(lost.counts.items())
                            if k)
-        what = f"{n} messages lost" + (f" ({topics})" if topics else "")
+        what = ("at least " if lost.uncounted else "") + f"{n} messages lost" \
+            + (f" in {lost.chunks} chunks" if lost.chunks > 1 else "") \
+            + (f" ({topics})" if topics else "")
+        if lost.uncounted:
+            what += (f"; the message indexes of {lost.uncounted} of these chunks are damaged "
+                     "too, so their messages are not counted")
     if origin_ns is None:
         return what
     if lost.first_ns is not None and lost.last_ns is not None:
