@@ -150,8 +150,8 @@ class McapScan:
         op, length = RECORD_HEAD.unpack_from(self.view, pos)
         if op not in KNOWN_OPS and op < 0x80:
             return f"an unknown record type 0x{op:02x}"
-        name = Opcode(op).name.lower().replace("_", " ") if op in KNOWN_OPS else "private"
         if pos + RECORD_HEAD.size + length > size:
+            name = Opcode(op).name.lower().replace("_", " ") if op in KNOWN_OPS else "private"
             return f"cut short: a {name} record of {length} bytes runs past the end"
         if op == OP_CHUNK:
             return chunk_framing(self.view, pos + RECORD_HEAD.size,
