@@ -3,25 +3,29 @@
 The tools ask a bag several things in turn (its topics and types, then the messages; its
 info and metadata, then the messages), so ``Bag`` opens and memory-maps each file once, on
 first use, and keeps it until closed: summaries, metadata records, channels and any number of
-walks share it. Files are walked record by record (``mcap_scan``: each chunk's CRC checked),
-so a file cut short by a crash yields every message before the cut; what could not be read
-is reported in ``problems`` rather than raised. ``info`` takes a sound file's summary instead
-of walking it, like ``ros2 bag info``.
+walks share it. Files are walked record by record (``mcap_scan``: each chunk's CRC checked,
+damaged parts skipped), so a damaged file yields every intact chunk and a file cut short by a
+crash every message before the cut; what could not be read is reported in ``problems`` (data
+lost: a result over it is partial) rather than raised, and what is odd but loses nothing (a
+file listed twice, no metadata.yaml) in ``notes``. ``info`` takes a file's summary instead of
+counting its messages, like ``ros2 bag info``, once every chunk has passed its CRC check.
 """
 
 from __future__ import annotations
 
 import contextlib
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
-from mcap.reader import SeekingReader
-from mcap.summary import Summary
-
+from .bag_info import BagInfo, TopicInfo, count_by_walking, count_from_summary
 from .errors import BagError
-from .mcap_scan import MappedFile, McapScan
+from .mcap_scan import MappedFile, McapScan, what_it_is
+from .mcap_summary import FileSummary
 from .metadata import read_metadata_yaml
+from .verify import damage
+
+__all__ = ["Bag", "BagInfo", "BagMessage", "TopicInfo", "opened"]
 
 
 @dataclass(frozen=True)
@@ -34,39 +38,10 @@ class BagMessage:
 
 
 @dataclass
-class TopicInfo:
-    name: str
-    type_name: str
-    count: int = 0
-    offered_qos_profiles: str = ""
-
-
-@dataclass
-class BagInfo:
-    """What ``info`` found: topics with counts, time span, metadata records, problems."""
-
-    path: Path
-    files: list[Path]
-    topics: dict[str, TopicInfo] = field(default_factory=dict)
-    start_ns: int | None = None
-    end_ns: int | None = None
-    metadata: dict[str, dict[str, str]] = field(default_factory=dict)
-    problems: list[str] = field(default_factory=list)
-
-    @property
-    def message_count(self) -> int:
-        return sum(t.count for t in self.topics.values())
-
-    @property
-    def duration_s(self) -> float:
-        return 0.0 if self.start_ns is None else (self.end_ns - self.start_ns) * 1e-9
-
-
-@dataclass
 class _Summary:
     """A file's summary section and metadata records; None where absent or damaged."""
 
-    summary: Summary | None
+    summary: FileSummary | None
     metadata: dict[str, dict[str, str]] | None
 
 
@@ -77,31 +52,41 @@ class Bag:
     of its metadata.yaml (None for a bare file or a missing or broken one).
     """
 
-    def __init__(self, path: Path, files: list[Path], metadata_yaml: dict | None) -> None:
+    def __init__(self, path: Path, files: list[Path], metadata_yaml: dict | None,
+                 notes: list[str] | None = None) -> None:
         self.path, self.files, self.metadata_yaml = path, files, metadata_yaml
+        self.notes = list(notes or [])
         self._mapped: dict[Path, MappedFile] = {}
         self._summaries: dict[Path, _Summary] = {}
         self._info: BagInfo | None = None
+        self._verified = False
 
     @classmethod
     def open(cls, path: str | Path) -> Bag:
         """The bag at ``path``: its files listed (from metadata.yaml where it names files that
-        exist, else the ``*.mcap`` present, by index); none is opened yet."""
+        exist, each once, else the ``*.mcap`` present, by index); none is opened yet."""
         path = Path(path)
         if path.is_file():
             return cls(path, [path], None)
         if not path.is_dir():
             raise BagError(f"bag {path}: no such file or directory")
         meta = read_metadata_yaml(path)
+        notes = [] if meta is not None else [
+            "no readable metadata.yaml (a crashed recording has none; repair writes it)"]
         try:
-            files = [path / p for p in (meta or {}).get("relative_file_paths", [])]
+            listed = [path / p for p in (meta or {}).get("relative_file_paths", [])]
         except TypeError:
-            files = []                         # a broken metadata.yaml: take the files present
+            listed = []                        # a broken metadata.yaml: take the files present
+        files = list(dict.fromkeys(listed))
+        for f in files:
+            if listed.count(f) > 1:
+                notes.append(f"metadata.yaml lists {f.name} {listed.count(f)} times; "
+                             "it is read once")
         if not files or not all(f.is_file() for f in files):
             files = sorted(path.glob("*.mcap"), key=_file_index)
         if not files:
             raise BagError(f"bag {path}: no .mcap file in it")
-        return cls(path, files, meta)
+        return cls(path, files, meta, notes)
 
     def close(self) -> None:
         for mapped in self._mapped.values():
@@ -128,7 +113,7 @@ class Bag:
         for file in self.files:
             yield McapScan(self.mapped(file), problems)
 
-    def summary(self, file: Path) -> Summary | None:
+    def summary(self, file: Path) -> FileSummary | None:
         """The file's summary section, or None if it has none (a crashed file) or it is bad."""
         return self._summary(file).summary
 
@@ -136,27 +121,64 @@ class Bag:
         if file not in self._summaries:
             found = _Summary(None, None)
             try:
-                reader = SeekingReader(self.mapped(file).file, validate_crcs=True)
-                found.summary = reader.get_summary()
+                found.summary = self.mapped(file).summary
                 if found.summary is not None and found.summary.statistics is not None:
-                    found.metadata = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
-            except Exception:               # any damage: the caller reads the file itself
+                    found.metadata = found.summary.metadata()
+            except (OSError, ValueError):       # any damage: the caller reads the file itself
                 pass
             self._summaries[file] = found
         return self._summaries[file]
 
     # ---- what the bag holds --------------------------------------------------------------
-    def info(self) -> BagInfo:
-        """Topics, counts, time span and metadata records: from each file's summary where it
-        has a sound one, else by reading the whole file (a crashed file). Worked out once."""
-        if self._info is None:
-            result = BagInfo(self.path, list(self.files))
+    def info(self, verify: bool = True) -> BagInfo:
+        """Topics, counts, time span, metadata records and header stamps: from each file's
+        summary where it has a sound one (with ``verify``, only once every chunk has passed
+        its CRC check: ``verify.damage``), else by reading the whole file (a crashed or
+        damaged file). BagError if no file is MCAP. Worked out once."""
+        if self._info is None or (verify and not self._verified):
+            result = BagInfo(self.path, list(self.files), notes=list(self.notes))
+            foreign = []
             for file in self.files:
-                self.mapped(file)                   # one that cannot be opened: OSError
-                if not self._info_from_summary(file, result):
-                    self._info_from_records(file, result)
-            self._info = result
+                mapped = self.mapped(file)          # one that cannot be opened: OSError
+                if not mapped.is_mcap:
+                    foreign.append(f"{file.name}: not an MCAP file ({what_it_is(mapped.view)})")
+                elif not self._from_summary(file, result, verify):
+                    count_by_walking(mapped, result)
+            if len(foreign) == len(self.files):
+                raise BagError(f"{self.path}: {foreign[0].split(': ', 1)[1]}"
+                               if self.path.is_file() else f"bag {self.path}: {foreign[0]}")
+            result.problems[:0] = foreign
+            repaired, notes = self.repaired()
+            result.problems += repaired
+            result.notes += notes
+            self._info, self._verified = result, verify
         return self._info
+
+    def repaired(self) -> tuple[list[str], list[str]]:
+        """What earlier repairs recorded (their ``repair`` metadata records) as (problems,
+        notes): a repair that skipped damaged data with intact data after it left a gap, a
+        problem of the bag; one that only lost the end of a crashed recording, a note."""
+        problems: list[str] = []
+        notes: list[str] = []
+        for file in self.files:
+            record = (self._summary(file).metadata or {}).get("repair")
+            if record is None or record.get("lost", "nothing") == "nothing":
+                continue
+            text = (f"{file.name} was repaired ({record.get('date', '?')}; the original is "
+                    f"kept as {record.get('original', '?')}), and lost: {record['lost']}")
+            (problems if record.get("gaps", "0") != "0" else notes).append(text)
+        return problems, notes
+
+    def _from_summary(self, file: Path, result: BagInfo, verify: bool) -> bool:
+        """``count_from_summary`` if the file has a sound summary (and, with ``verify``,
+        every chunk passes its CRC check)."""
+        found = self._summary(file)
+        if found.summary is None or found.summary.statistics is None or found.metadata is None:
+            return False
+        if verify and damage(self.mapped(file)):
+            return False                            # counted by walking, damage reported
+        count_from_summary(self.mapped(file), found.summary, found.metadata, result)
+        return True
 
     @property
     def metadata(self) -> dict[str, dict[str, str]]:
@@ -201,46 +223,6 @@ class Bag:
                 if topics is None or topic in topics:
                     yield BagMessage(topic, types.get(cid, ""), bytes(data), log, pub)
 
-    def _info_from_summary(self, file: Path, result: BagInfo) -> bool:
-        found = self._summary(file)
-        summary = found.summary
-        if summary is None or summary.statistics is None or found.metadata is None:
-            return False
-        stats = summary.statistics
-        for cid, ch in summary.channels.items():
-            schema = summary.schemas.get(ch.schema_id)
-            topic = result.topics.setdefault(ch.topic, TopicInfo(
-                ch.topic, schema.name if schema else "",
-                offered_qos_profiles=ch.metadata.get("offered_qos_profiles", "")))
-            topic.count += stats.channel_message_counts.get(cid, 0)
-        if stats.message_count:
-            _span(result, stats.message_start_time)
-            _span(result, stats.message_end_time)
-        result.metadata.update(found.metadata)
-        return True
-
-    def _info_from_records(self, file: Path, result: BagInfo) -> None:
-        """Count by walking the file (fast path, CRC-checked chunks) up to any damage."""
-        counts: dict[int, int] = {}
-        start = end = None
-        scan = McapScan(self.mapped(file), result.problems)
-        for cid, log, _, _ in scan.messages():
-            counts[cid] = counts.get(cid, 0) + 1
-            if start is None or log < start:
-                start = log
-            if end is None or log > end:
-                end = log
-        for cid, ch in scan.channels.records.items():
-            topic = result.topics.setdefault(ch.topic, TopicInfo(
-                ch.topic, scan.channels.types[cid],
-                offered_qos_profiles=ch.metadata.get("offered_qos_profiles", "")))
-            topic.count += counts.get(cid, 0)
-        result.metadata.update(scan.metadata)
-        if start is not None:
-            _span(result, start)
-            _span(result, end)
-
-
 @contextlib.contextmanager
 def opened(bag: str | Path | Bag) -> Iterator[Bag]:
     """``bag`` itself if already open (left open), else the bag at that path, closed after."""
@@ -249,11 +231,6 @@ def opened(bag: str | Path | Bag) -> Iterator[Bag]:
         return
     with Bag.open(bag) as b:
         yield b
-
-
-def _span(result: BagInfo, t: int) -> None:
-    result.start_ns = t if result.start_ns is None else min(result.start_ns, t)
-    result.end_ns = t if result.end_ns is None else max(result.end_ns, t)
 
 
 def _file_index(p: Path) -> tuple[int, str]:

@@ -8,7 +8,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from .bag import Bag, BagInfo, BagMessage, TopicInfo
-from .repair import repair
+from .repair import repair as repair_bag
 
 __all__ = ["BagInfo", "BagMessage", "TopicInfo", "info", "read_messages", "repair"]
 
@@ -25,3 +25,8 @@ def read_messages(path: str | Path, topics: set[str] | None = None,
     with Bag.open(path) as bag:
         yield from bag.messages(topics, problems)
 
+
+
+def repair(path: str | Path) -> BagInfo:
+    """``repair.repair`` of the bag at ``path``: the info of the repaired bag."""
+    return repair_bag(path).info

@@ -49,11 +49,21 @@ class ResimResult:
     problems: list[str] = field(default_factory=list)
 
     @property
-    def exact(self) -> bool:
+    def matched(self) -> bool:
+        """Every sample read equals the re-run bit for bit."""
         return self.samples > 0 and all(v == 0.0 for v in self.max_difference.values())
+
+    @property
+    def exact(self) -> bool:
+        """The whole session reproduced: every sample matched and none is missing."""
+        return self.matched and not self.problems
 
     def explanation(self) -> str:
         """Why the re-run matches or not, in words."""
+        if self.matched and self.problems:
+            return ("every sample read equals the re-run bit for bit, but the bag is "
+                    "incomplete, so only part of the session was compared and this is no "
+                    "reproduction of the whole session: " + "; ".join(self.problems))
         if self.exact:
             return ("reproduced exactly: every recorded sample equals the re-run bit for bit"
                     + (" (real-time mode: the ticks' simulated times come from the recorded "
@@ -79,7 +89,7 @@ def resimulate(bag: str | Path | Bag, progress: Callable[[float], None] | None =
 
 
 def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResult:
-    found = bag.info()
+    found = bag.info(verify=False)              # the walk below checks every chunk
     meta = found.metadata
     if "parameters" not in meta or "node" not in meta.get("session", {}):
         raise BagError(f"bag {bag.path}: no drill_sim session metadata (parameters, session); "
@@ -92,7 +102,7 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
     if topics["joints"] not in found.topics:
         raise BagError(f"bag {bag.path}: no {topics['joints']} to compare with")
     result = ResimResult(bag.path, "sim-time" if p.get("publish_clock") else "real-time",
-                         meta["session"].get("preset", "?"), problems=list(found.problems))
+                         meta["session"].get("preset", "?"))
     try:
         rig = session.make_rig(p)
         session.start(rig, p)
@@ -103,10 +113,12 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
     total = max(found.topics[topics["joints"]].count, 1)
     handlers = {topics["joints"]: run.sample, topics["events"]: run.event}
     handlers.update({t.under(node): partial(run.command, t.command) for t in rig_topics.COMMANDS})
-    for m in bag.messages(set(handlers), result.problems):
+    walked: list[str] = []
+    for m in bag.messages(set(handlers), walked):
         handlers[m.topic](m.data)
         if progress is not None and m.topic == topics["joints"]:
             progress(result.samples / total)
+    result.problems = list(dict.fromkeys(found.problems + walked + bag.repaired()[0]))
     return result
 
 

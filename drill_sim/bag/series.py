@@ -1,13 +1,15 @@
-"""The rig's time series from a bag, decoded without ROS and all at once.
+"""The rig's time series from a bag, decoded without ROS, a chunk at a time.
 
 The node's ``~/joint_states`` messages have one fixed layout within a session (same four joint
-names, so the same byte length), so their CDR bytes stack into one array and the float fields
-are read with a single numpy view: an hour at 1 kHz decodes in a fraction of a second.
+names, so the same byte length), so a chunk's CDR bytes stack into one array and the float
+fields are read with a single numpy view: an hour at 1 kHz decodes in a fraction of a second.
+The chunks stream (``joint_chunks``), so tools that sum over them keep memory bounded.
 """
 
 from __future__ import annotations
 
 import struct
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,7 +18,8 @@ import numpy as np
 from ..wire.rig_topics import JOINT_NAMES, JOINT_STATES
 from .bag import Bag, opened
 from .errors import BagError
-from .mcap_index import fixed_size_channel
+from .mcap_index import channel_chunks
+from .rig_stats import QUANTITIES, RigStats
 
 JOINT_STATE = JOINT_STATES.type_name
 # where each quantity sits in the node's joint_states (msg_docs/node.md): (array, joint index)
@@ -30,6 +33,10 @@ JOINT_FIELDS = {
 # uint32 count and 4 bytes of padding (one slot), velocity[4], another slot, effort[4].
 JOINT_VALUES_F64 = 14
 JOINT_ARRAY_START = {"position": 0, "velocity": 5, "effort": 10}
+# the column of each quantity in the (N, 12) values ``joint_chunks`` yields
+VALUE_COLUMN = {name: 4 * ("position", "velocity", "effort").index(kind) + j
+                for name, (kind, j) in JOINT_FIELDS.items()}
+JointChunk = tuple[np.ndarray, np.ndarray]       # header stamps [ns] int64, (N, 12) values
 
 
 @dataclass(frozen=True)
@@ -57,6 +64,15 @@ class RigSeries:
             name: np.ascontiguousarray(arrays[kind][:, j]) for name, (kind, j)
             in JOINT_FIELDS.items()})
 
+    @classmethod
+    def from_chunks(cls, topic: str, chunks: list[JointChunk]) -> RigSeries:
+        """From ``joint_chunks`` (stamps [ns], (N, 12) values); BagError if they are empty."""
+        if not any(ns.size for ns, _ in chunks):
+            raise BagError(f"{topic}: no samples in the bag or the window")
+        ns = np.concatenate([c[0] for c in chunks])
+        v = np.concatenate([c[1] for c in chunks])
+        return cls.from_joints(topic, ns * 1e-9, v[:, 0:4], v[:, 4:8], v[:, 8:12])
+
     @property
     def stuck(self) -> np.ndarray:
         """Samples with the bit stuck: not rotating while pressed on the rock."""
@@ -72,24 +88,11 @@ class RigSeries:
         return RigSeries(self.topic, *(getattr(self, f)[keep] for f in _FIELDS))
 
     def metrics(self) -> dict[str, float]:
-        """MODEL.md section 7 over the samples (each sample weighs the same: a fixed tick)."""
-        w = self.bit_speed_rad_s
-        if w.size == 0:
-            raise BagError(f"{self.topic}: no samples in the window")
-        stuck = self.stuck
-        mean = float(np.mean(w))
-        return {
-            "duration_s": float(self.time_s[-1] - self.time_s[0]),
-            "samples": int(w.size),
-            "ssi": float((w.max() - w.min()) / (2 * mean)) if mean > 0 else float("inf"),
-            "stick_fraction": float(np.mean(stuck)),
-            "bounce_fraction": float(np.mean(self.wob_n == 0.0)),
-            "mean_bit_speed_rad_s": mean,
-            "mean_wob_n": float(np.mean(self.wob_n)),
-            "mean_tob_nm": float(np.mean(self.tob_nm)),
-            "mean_surface_torque_nm": float(np.mean(self.surface_torque_nm)),
-            "mean_rop_m_s": float(np.mean(self.rop_m_s)),
-        }
+        """MODEL.md section 7 over the samples (``rig_stats.RigStats``)."""
+        stats = RigStats(self.topic)
+        t = self.time_s - self.time_s[0] if self.time_s.size else self.time_s
+        stats.add(t, {q: getattr(self, q) for q in QUANTITIES})
+        return stats.result()
 
 
 _FIELDS = ("time_s", "top_drive_speed_rad_s", "surface_torque_nm", "hook_load_n", "bit_depth_m",
@@ -120,47 +123,55 @@ def joint_state_layout(data: bytes) -> tuple[list[str], int]:
     return names, align(pos + 4, 8)
 
 
-def rig_series(bag: str | Path | Bag, topic: str | None = None) -> RigSeries:
-    """The rig series of ``topic`` (default: the one topic ending in ``joint_states``)."""
+def columns(values: np.ndarray) -> dict[str, np.ndarray]:
+    """The (N, 12) values of ``joint_chunks`` as one column per quantity."""
+    return {name: values[:, k] for name, k in VALUE_COLUMN.items()}
+
+
+def joint_topic(bag: Bag, topic: str | None = None) -> str:
+    """The rig's joint_states topic: ``topic`` if the bag has it, else the one JointState
+    topic (BagError if there is none or several)."""
+    joint_topics = sorted(t for t, kind in bag.topic_types().items()
+                          if kind == JOINT_STATE and (topic is None or t == topic))
+    if not joint_topics:
+        raise BagError(f"bag {bag.path}: no {JOINT_STATE} topic"
+                       f"{'' if topic is None else ' ' + topic} to read the rig from")
+    if len(joint_topics) > 1:
+        raise BagError(f"bag {bag.path}: several joint_states topics "
+                       f"({', '.join(joint_topics)}); choose one with --topic")
+    return joint_topics[0]
+
+
+def joint_chunks(bag: Bag, name: str, problems: list[str]) -> Iterator[JointChunk]:
+    """The samples of the joint_states topic ``name``, a chunk at a time in file order: header
+    stamps [ns] and (N, 12) values (``VALUE_COLUMN``). Damage is reported into ``problems``
+    and skipped; memory stays bounded however long the bag."""
+    for scan in bag.scans(problems):
+        yield from channel_chunks(scan, name, _decode)
+
+
+def rig_series(bag: str | Path | Bag, topic: str | None = None,
+               problems: list[str] | None = None) -> RigSeries:
+    """The rig series of ``topic`` (default: the one topic ending in ``joint_states``), all
+    in memory (``joint_chunks`` streams it); damage goes into ``problems``."""
+    problems = [] if problems is None else problems
     with opened(bag) as b:
-        joint_topics = sorted(t for t, kind in b.topic_types().items()
-                              if kind == JOINT_STATE and (topic is None or t == topic))
-        if not joint_topics:
-            raise BagError(f"bag {b.path}: no {JOINT_STATE} topic"
-                           f"{'' if topic is None else ' ' + topic} to read the rig from")
-        if len(joint_topics) > 1:
-            raise BagError(f"bag {b.path}: several joint_states topics "
-                           f"({', '.join(joint_topics)}); choose one with --topic")
-        name = joint_topics[0]
-        parts = []
-        for scan in b.scans([]):
-            values = fixed_size_channel(scan, name, _decode)
-            if values is None:                  # no index or sizes differ: message by message
-                names = scan.channels.topics
-                datas = [bytes(d) for cid, _, _, d in scan.messages() if names.get(cid) == name]
-                same = [d for d in datas if len(d) == len(datas[0])]
-                values = _decode(np.frombuffer(b"".join(same), np.uint8).reshape(
-                    len(same), -1)) if same else None
-            if values is not None and values.size:
-                parts.append(values)
-    if not parts:
-        raise BagError(f"{name}: no message in the bag")
-    v = np.concatenate(parts)
-    return RigSeries.from_joints(name, v[:, 0], v[:, 1:5], v[:, 5:9], v[:, 9:13])
+        name = joint_topic(b, topic)
+        return RigSeries.from_chunks(name, list(joint_chunks(b, name, problems)))
 
 
-def _decode(rows: np.ndarray) -> np.ndarray:
-    """(N, 13) float64 from N joint_states messages of one layout: stamp [s], position[4],
-    velocity[4], effort[4] in the order of JOINT_NAMES."""
+def _decode(rows: np.ndarray) -> JointChunk:
+    """Header stamps [ns] and (N, 12) float64 (position[4], velocity[4], effort[4] in the
+    order of JOINT_NAMES) from N joint_states messages of one layout."""
     names, offset = joint_state_layout(rows[0].tobytes())
     if tuple(names) != JOINT_NAMES:
         raise BagError(f"joint_states with joints {names}, expected drill_sim's "
                        f"{list(JOINT_NAMES)}")
     stamp = np.ascontiguousarray(rows[:, 4:12]).view("<i4")
-    out = np.empty((rows.shape[0], 13))
-    out[:, 0] = stamp[:, 0] + 1e-9 * stamp[:, 1].view("<u4")
+    ns = stamp[:, 0].astype(np.int64) * 1_000_000_000 + stamp[:, 1].view("<u4")
+    out = np.empty((rows.shape[0], 12))
     f = np.ascontiguousarray(rows[:, offset:offset + 8 * JOINT_VALUES_F64]).view("<f8")
     for k, kind in enumerate(("position", "velocity", "effort")):
         at = JOINT_ARRAY_START[kind]
-        out[:, 1 + 4 * k:5 + 4 * k] = f[:, at:at + 4]
-    return out
+        out[:, 4 * k:4 * k + 4] = f[:, at:at + 4]
+    return ns, out

@@ -57,6 +57,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--wait-timeout", type=number, default=30.0, metavar="S",
                         help="play anyway after S seconds of waiting (default 30), up to "
                              f"{MAX_WAIT_S:g}")
+    parser.add_argument("--partial", action="store_true",
+                        help="replay the readable part of a damaged bag (without it a damaged "
+                             "bag is refused with exit status 1)")
 
 
 def _check(args: argparse.Namespace) -> None:
@@ -87,8 +90,14 @@ def run(args: argparse.Namespace) -> int:
     except BagError as exc:
         print(f"drill_sim_replay: {exc}", file=sys.stderr)
         return 2
-    for problem in found.problems:
-        print(f"drill_sim_replay: {problem}", file=sys.stderr)
+    problems = found.problems + source.repaired()[0]
+    for problem in problems:
+        print(f"drill_sim_replay: incomplete bag: {problem}", file=sys.stderr)
+    if problems and not args.partial:
+        source.close()
+        print("drill_sim_replay: the bag is incomplete: refused (pass --partial to replay "
+              "its readable part)", file=sys.stderr)
+        return 1
     topics = {name: (t.type_name, t.offered_qos_profiles) for name, t in found.topics.items()
               if t.count and (args.topics is None or name in args.topics)}
     missing = sorted(set(args.topics or ()) - set(found.topics))
@@ -136,6 +145,8 @@ def _play(args: argparse.Namespace, argv: list[str], bag: Path, source: Bag, fou
         progress.close()
         player.wait_acked(10.0)
         print(f"drill_sim_replay: published {player.sent} messages", file=sys.stderr)
+        if player.problems and not args.partial:
+            return 1                                # damage the bag's info did not show
     finally:
         player.destroy_node()
         rclpy.try_shutdown()

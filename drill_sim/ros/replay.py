@@ -61,6 +61,7 @@ class Player(Node):
             if options.clock_hz else None
         self.encode_clock = cdr.clock()
         self.sent = 0
+        self.problems: list[str] = []             # damage met while playing
 
     # ---- before: subscribers -----------------------------------------------------------
     def wait_for_subscribers(self, stop: list[int], settle_s: float = 0.25) -> str | None:
@@ -121,7 +122,9 @@ class Player(Node):
                 self.sent += 1
                 progress(log)
         for problem in problems:
-            self.get_logger().warning(problem)
+            if problem not in self.problems:
+                self.problems.append(problem)
+                self.get_logger().warning(problem)
 
     def _publish_clock(self, bag_ns: float) -> None:
         if self.clock_pub is not None:

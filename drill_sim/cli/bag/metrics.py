@@ -1,13 +1,16 @@
-"""``drill_sim bag metrics``: SSI, stick fraction and means of a recorded rig session."""
+"""``drill_sim bag metrics``: SSI, stick fraction and means of a recorded rig session, summed a
+chunk at a time (memory does not grow with the bag)."""
 
 from __future__ import annotations
 
 import argparse
 import json
 
+from ...bag.rig_stats import RigStats
+from ...bag.series import columns
 from . import window
 
-HELP = "SSI, stick fraction and means of a recorded rig session"
+HELP = "SSI, stick fraction and means of a recorded rig session (default: all of it)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -17,12 +20,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     window.check(args)
-    s = window.series(args)
-    m = s.metrics()
+    with window.samples(args) as s:
+        stats = RigStats(s.topic)
+        for ns, values in s.chunks:
+            stats.add((ns - s.chunks.origin_ns) / 1e9, columns(values))
+    status = s.verdict(args, stats.problems())
+    if status:
+        return status
+    m = stats.result()
+    problems = list(dict.fromkeys(s.problems + stats.problems()))
     if args.json:
-        print(json.dumps(m))
+        print(json.dumps({**m, "problems": problems}))
         return 0
-    print(f"{s.topic}: {m['samples']} samples over {m['duration_s']:.3f} s")
+    print(f"{s.topic}: {m['samples']} samples over {m['duration_s']:.3f} s of header stamps"
+          + (" (partial: the bag is damaged)" if problems else ""))
     for key, value in m.items():
         if key not in ("samples", "duration_s"):
             print(f"  {key:<24} {value:.6g}")

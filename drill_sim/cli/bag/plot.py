@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ...bag.series import RigSeries
 from ..plot import plot_rig_series
 from . import window
 
@@ -18,7 +19,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     window.check(args, args.out)
-    s = window.series(args)
-    plot_rig_series(args.out, s, title=f"{args.bag.name}: {s.topic}")
+    with window.samples(args) as s:
+        series = RigSeries.from_chunks(s.topic, list(s.chunks))
+    status = s.verdict(args)
+    if status:
+        return status
+    plot_rig_series(args.out, series, title=f"{args.bag.name}: {s.topic}")
     print(f"plot written to {args.out}")
     return 0

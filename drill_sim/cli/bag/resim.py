@@ -1,5 +1,6 @@
 """``drill_sim bag resim``: run the model again from a session's bag and compare; exit status
-1 when the re-run differs from the recording."""
+1 when the re-run differs from the recording or the bag is incomplete (with ``--partial``, 0
+when every sample read matched)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from pathlib import Path
 from ...bag.bag import Bag
 from ...bag.resim import ResimResult, resimulate
 from ...terminal import Progress
+from . import partial
 
 HELP = ("run the model again from the recorded parameters and commands and compare with the "
         "recorded outputs (exit 1 if they differ)")
@@ -18,6 +20,7 @@ HELP = ("run the model again from the recorded parameters and commands and compa
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("bag", type=Path, help="bag directory or .mcap file of a rig session")
     parser.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    partial.add_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -31,13 +34,14 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(_as_json(r)))
     else:
         _print(r)
-    return 0 if r.exact else 1
+    return 0 if r.exact or (args.partial and r.matched) else 1
 
 
 def _as_json(r: ResimResult) -> dict:
     return {"bag": str(r.bag), "mode": r.mode, "preset": r.preset, "samples": r.samples,
             "commands": r.commands, "refused": r.refused, "events": r.events,
-            "exact": r.exact, "max_difference": r.max_difference,
+            "exact": r.exact, "matched": r.matched, "problems": r.problems,
+            "max_difference": r.max_difference,
             "worst": dict(zip(("quantity", "difference", "time_s"), r.worst, strict=True)),
             "explanation": r.explanation()}
 
@@ -49,7 +53,7 @@ def _print(r: ResimResult) -> None:
     print("largest difference re-run - recorded, per quantity:")
     for name, value in r.max_difference.items():
         print(f"  {name:<24} {value:.3g}")
-    if not r.exact:
+    if not r.matched:
         name, value, t = r.worst
         print(f"worst: {name} off by {value:.3g} at t = {t:.6f} s")
     print(r.explanation())
