@@ -92,7 +92,7 @@ class WaveLine:
         [[1, 0], [-c s, 1]]. Torque is the one the part above exerts on the part below."""
         s = np.asarray(s, dtype=complex)
         m11, m12, m21, m22 = np.ones_like(s), np.zeros_like(s), np.zeros_like(s), np.ones_like(s)
-        for z, d, c in zip(self.z, self.delay, self.dashpot):
+        for z, d, c in zip(self.z, self.delay, self.dashpot, strict=True):
             ch, sh = np.cosh(s * d), np.sinh(s * d)
             sh_over_s = d * np.sinc(1j * s * d / np.pi)        # sinh(sD)/s, D at s = 0
             a11, a12, a21, a22 = ch, -sh_over_s / z, -z * s * sh, ch

@@ -20,8 +20,16 @@ import numpy as np
 from numba import njit
 
 from . import kernel as kn
-from .kernel import (EVENT_MARGIN, MAX_SPLITS, REGIME_STUCK, _accumulate, _bit_rock_law,
-                     _blade_height, _first_swept_node, _surface_at)
+from .kernel import (
+    EVENT_MARGIN,
+    MAX_SPLITS,
+    REGIME_STUCK,
+    _accumulate,
+    _bit_rock_law,
+    _blade_height,
+    _first_swept_node,
+    _surface_at,
+)
 
 # extra float state (after the lumped kernel's X_*, which keep their meaning; X_TS is the
 # surface torque at the top of the string)
