@@ -1,0 +1,210 @@
+"""The numba stepper of the distributed string: the lumped kernel's bit, a string of delay lines.
+
+Each step h: (1) read the Riemann invariants arriving at every junction this step (ring-buffer
+slot ``steps mod N`` of each segment: what left its other end N steps ago); (2) step the BHA
+and the bit exactly as the lumped kernel does (the same inline laws ``_bit_rock_law``,
+``_surface_at``, ``_first_swept_node``, ``_blade_height``, ``_accumulate``, switches located
+and the step split there), with the string torque C (phi_td - phi) replaced by the pipe's
+bottom torque a - (z + c) omega and W0 by its bottom force a_a - (z_a + c_a) v (omega, v
+predicted at each part's midpoint from the last step's acceleration); (3) send the reflected
+invariants b = a - 2 z omega_mean up from the BHA, solve each junction (impedance change and
+dashpot) and the top boundary, and write the departing invariants into the slots just read.
+Memory is fixed: the ring buffers are sized at construction; nothing is allocated per step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from . import kernel as kn
+from .kernel import (
+    EVENT_MARGIN,
+    MAX_SPLITS,
+    REGIME_STUCK,
+    _accumulate,
+    _bit_rock_law,
+    _blade_height,
+    _first_swept_node,
+    _surface_at,
+)
+
+# extra float state (after the lumped kernel's X_*, which keep their meaning; X_TS is the
+# surface torque at the top of the string)
+X_T_BOTTOM, X_F_BOTTOM, X_V_TOP, X_F_TOP, X_DOM, X_DV, X_A_PREV = range(kn.NX, kn.NX + 7)
+NXD = kn.NX + 7
+# extra accumulators: dashpot dissipation, torsional [C] and axial [F* L*]
+A_DAMPED_ROT, A_DAMPED_AX = kn.NA, kn.NA + 1
+NAD = kn.NA + 2
+# extra output columns: pipe torque and force on the BHA, top axial speed and force
+O_T_BOTTOM, O_F_BOTTOM, O_V_TOP, O_F_TOP = range(kn.NO, kn.NO + 4)
+NOD = kn.NO + 4
+
+
+@njit(cache=True, inline="always")
+def _arrivals(buf, off, n_seg, slot_of, k, a_in, b_in):
+    """Invariants arriving this step: a at each segment's bottom, b at its top."""
+    for j in range(n_seg.size):
+        slot = k % n_seg[j]
+        slot_of[j] = slot
+        a_in[j] = buf[off[j] + slot]
+        b_in[j] = buf[off[j] + n_seg[j] + slot]
+
+
+@njit(cache=True, inline="always")
+def _junctions(buf, off, n_seg, z, c, slot_of, a_in, b_in, top_speed, bottom_speed):
+    """Departures of this step into the slots just read; returns the dashpot power of the
+    interior junctions. The top's speed is imposed (a top torque boundary would give it
+    from the drive's inertia); the bottom moves with the BHA."""
+    m = n_seg.size
+    buf[off[0] + slot_of[0]] = b_in[0] + 2.0 * z[0] * top_speed
+    power = 0.0
+    for j in range(1, m):
+        om = (a_in[j - 1] - b_in[j]) / (z[j - 1] + z[j] + c[j - 1])
+        power += c[j - 1] * om * om
+        buf[off[j - 1] + n_seg[j - 1] + slot_of[j - 1]] = a_in[j - 1] - 2.0 * z[j - 1] * om
+        buf[off[j] + slot_of[j]] = b_in[j] + 2.0 * z[j] * om
+    buf[off[m - 1] + n_seg[m - 1] + slot_of[m - 1]] = a_in[m - 1] - 2.0 * z[m - 1] * bottom_speed
+    return power
+
+
+@njit(cache=True)
+def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abuf, scratch,
+            slots, n_steps, out, out_every, out_row):
+    """Advance ``n_steps`` steps; rows every ``out_every`` steps (the lumped kernel's columns,
+    then O_T_BOTTOM.. if ``out`` has them); return the next free row. A step that would turn
+    the bit more than a sector is refused (K_REFUSED = 1), as in the lumped kernel."""
+    n, lam, beta, h, psi = p[kn.P_N], p[kn.P_LAM], p[kn.P_BETA], p[kn.P_H], p[kn.P_PSI]
+    inv_dth, dth = p[kn.P_INV_DTHETA], p[kn.P_DTHETA]
+    w0, om0, v_min = c[kn.C_W0], c[kn.C_OMEGA0], c[kn.C_V_MIN]
+    n_nodes = surf.shape[0]
+    mask = n_nodes - 1
+    sector = n_nodes * dth
+    rows, extra = out.shape[0], out.shape[1] >= NOD
+    mt, ma = tn.size, an.size
+    zt_b, za_b = tz[mt - 1] + tc[mt - 1], az[ma - 1] + ac[ma - 1]
+    ta_in, tb_in, aa_in, ab_in = scratch[0], scratch[1], scratch[2], scratch[3]
+    tslot, aslot = slots[0], slots[1]
+    k[kn.K_REFUSED] = 0
+    (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t, k_last,
+     regime, a_om_min, a_om_max, a) = kn._load(x, k, acc)
+    steps, sampled = k[kn.K_STEPS], k[kn.K_SAMPLED]
+    dom, dv, a_prev = x[X_DOM], x[X_DV], x[X_A_PREV]
+    t_bot, f_bot, v_top, f_top = x[X_T_BOTTOM], x[X_F_BOTTOM], x[X_V_TOP], x[X_F_TOP]
+    a_w, a_tob = acc[kn.A_W], acc[kn.A_T]
+    work_td, work_w, work_h = acc[kn.A_WORK_TOP_DRIVE], acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST]
+    damp_r, damp_a = acc[A_DAMPED_ROT], acc[A_DAMPED_AX]
+    ts_top = x[kn.X_TS]
+    for _ in range(n_steps):
+        _arrivals(tbuf, toff, tn, tslot, steps, ta_in, tb_in)
+        _arrivals(abuf, aoff, an, aslot, steps, aa_in, ab_in)
+        a_t, a_a = ta_in[mt - 1], aa_in[ma - 1]
+        rate = (a_t - a_prev) / h          # the bottom torque's rate while the bit is held
+        # the top: speed imposed; hook force w0 unless the drawworks' speed limit holds it
+        ts_top = tb_in[0] + tz[0] * om0
+        v_top = (w0 - ab_in[0]) / az[0]
+        if v_top < v_min:
+            v_top = v_min
+        f_top = ab_in[0] + az[0] * v_top
+        # the BHA and the bit: the lumped kernel's step, taken in parts at the laws' switches
+        hs, left, splits, om_int, v_int = h, h, 1, 0.0, 0.0
+        refused = False
+        while True:
+            h2 = 0.5 * hs
+            hpsi = hs * psi
+            ts = a_t - zt_b * (om + h2 * dom)
+            fb = a_a - za_b * (v + h2 * dv)
+            u_m = u + h2 * v
+            phi_m = phi + h2 * om
+            s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
+            delta_new = u_m - s_m
+            regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
+                delta_new, slope, regime, v, om, ts, fb, rate, n, lam, beta, hs, hpsi)
+            if splits < MAX_SPLITS and EVENT_MARGIN < event < 1.0 - EVENT_MARGIN:
+                splits += 1
+                hs *= event
+                continue
+            phi_new = phi_m + h2 * om_new
+            if phi_new - phi > sector:
+                refused = True
+                break
+            regime, w, t, g, delta = regime_new, w_new, t_new, g_new, delta_new
+            u_new = u_m + h2 * v_new
+            k_new = np.int64(math.floor(phi_new * inv_dth))
+            if k_new > k_last:
+                dphi = phi_new - phi
+                for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
+                    uc = _blade_height(kk * dth, phi, dphi, u, u_new)
+                    jj = kk & mask
+                    s_behind = surf[jj]
+                    if uc > s_behind:
+                        surf[jj] = uc
+                        if uc > hole:
+                            hole = uc
+                k_last = k_new
+            elif k_new < k_last:
+                k_last = k_new
+                s_behind = surf[k_new & mask]
+            om_bar, v_bar = 0.5 * (om + om_new), 0.5 * (v + v_new)
+            a = _accumulate(a, hs, regime, om_bar, v_bar, w, t, ts_top, 0.0)
+            damp_r += hs * tc[mt - 1] * (om + h2 * dom) * om_bar
+            damp_a += hs * ac[ma - 1] * (v + h2 * dv) * v_bar
+            om_int += hs * om_bar
+            v_int += hs * v_bar
+            sum_w += w * (hs / h)
+            sum_t += t * (hs / h)
+            t_bot, f_bot = ts, fb
+            dom = 0.0 if regime == REGIME_STUCK else (om_new - om) / hs
+            dv = 0.0 if v_new == 0.0 else (v_new - v) / hs
+            u, v, phi, om = u_new, v_new, phi_new, om_new
+            tau += hs
+            a_om_min = min(a_om_min, om)
+            a_om_max = max(a_om_max, om)
+            since_stick = 0.0 if regime == REGIME_STUCK else since_stick + hs
+            left -= hs
+            if left <= 0.0:
+                break
+            hs = left
+        if refused:
+            k[kn.K_REFUSED] = 1
+            break
+        # the string: reflections at the BHA, junctions, the top
+        damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tslot, ta_in, tb_in, om0, om_int / h)
+        damp_a += h * _junctions(abuf, aoff, an, az, ac, aslot, aa_in, ab_in, v_top, v_int / h)
+        work_td += h * ts_top * om0
+        work_w += h * w0 * v_top
+        work_h += h * (f_top - w0) * v_top
+        ptd += h * om0
+        a_prev = a_t
+        steps += 1
+        if out_row < rows and steps % out_every == 0:
+            o = out[out_row]
+            o[kn.O_TAU], o[kn.O_U], o[kn.O_V], o[kn.O_PHI], o[kn.O_OMEGA] = tau, u, v, phi, om
+            o[kn.O_PHI_TD] = ptd
+            o[kn.O_W] = sum_w / (steps - sampled)
+            o[kn.O_T] = sum_t / (steps - sampled)
+            o[kn.O_TS], o[kn.O_DELTA], o[kn.O_REGIME] = ts_top, delta, regime
+            o[kn.O_W0], o[kn.O_OMEGA0], o[kn.O_G] = w0, om0, g
+            if extra:
+                o[O_T_BOTTOM], o[O_F_BOTTOM], o[O_V_TOP], o[O_F_TOP] = t_bot, f_bot, v_top, f_top
+            out_row += 1
+            a_w += h * sum_w
+            a_tob += h * sum_t
+            sum_w = 0.0
+            sum_t = 0.0
+            sampled = steps
+    kn._store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
+              sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
+    x[kn.X_TS] = ts_top                      # _store wrote the lumped phi_td - phi
+    x[X_T_BOTTOM], x[X_F_BOTTOM], x[X_V_TOP], x[X_F_TOP] = t_bot, f_bot, v_top, f_top
+    x[X_DOM], x[X_DV], x[X_A_PREV] = dom, dv, a_prev
+    acc[kn.A_TIME] += (steps - k[kn.K_STEPS]) * h
+    acc[kn.A_W0] += (steps - k[kn.K_STEPS]) * h * w0
+    acc[kn.A_OMEGA0] += (steps - k[kn.K_STEPS]) * h * om0
+    k[kn.K_STEPS], k[kn.K_SAMPLED] = steps, sampled
+    acc[kn.A_W], acc[kn.A_T] = a_w, a_tob
+    acc[kn.A_WORK_TOP_DRIVE], acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST] = work_td, work_w, work_h
+    acc[A_DAMPED_ROT], acc[A_DAMPED_AX] = damp_r, damp_a
+    return out_row

@@ -1,0 +1,159 @@
+"""``StringSimulator``: the ``Simulator`` API on a distributed string (dimensionless).
+
+The BHA, the bit, the rock surface, the commands, the metrics window and the outputs are the
+lumped simulator's (same state layout, same rows); the string is two sets of ring buffers
+(torsional and axial invariants) advanced by ``distributed_kernel.advance``. ``ts`` (the
+surface torque) is the torque at the top of the string; the pipe's torque on the BHA is
+``bottom_torque``. Starts: ``start_steady`` (every section carrying the steady torque and force
+at the steady speeds) and ``start_at_rest`` (string relaxed, hanging in static equilibrium).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import distributed_kernel as dk
+from . import kernel as kn
+from .distributed import StringWaves, WaveLine
+from .parameters import Groups, ParameterError
+from .simulator import Simulator
+
+
+class _Line:
+    """The arrays of one wave line: impedances, ring-buffer lengths and offsets, dashpots."""
+
+    def __init__(self, line: WaveLine) -> None:
+        self.z = np.ascontiguousarray(line.z, dtype=np.float64)
+        self.n = np.ascontiguousarray(line.steps, dtype=np.int64)
+        self.c = np.ascontiguousarray(line.dashpot, dtype=np.float64)
+        self.off = np.concatenate([[0], np.cumsum(2 * self.n)[:-1]]).astype(np.int64)
+        self.buf = np.zeros(int(2 * self.n.sum()))
+
+    def fill_steady(self, force: float, speed: float) -> float:
+        """Every segment carrying ``force`` at the BHA plus the dashpots below it, at
+        ``speed``; returns the force at the top."""
+        below = force + self.c[-1] * speed
+        for j in range(self.n.size - 1, -1, -1):
+            o, m = self.off[j], self.n[j]
+            self.buf[o:o + m] = below + self.z[j] * speed
+            self.buf[o + m:o + 2 * m] = below - self.z[j] * speed
+            if j > 0:
+                below += self.c[j - 1] * speed
+        return below
+
+    def energy(self, h: float) -> float:
+        """Energy in the line: h sum (a^2 + b^2)/(4 z) over every slot."""
+        total = 0.0
+        for j in range(self.n.size):
+            o, m = self.off[j], self.n[j]
+            total += float(np.sum(self.buf[o:o + 2 * m] ** 2)) / (4.0 * self.z[j])
+        return h * total
+
+
+class StringSimulator(Simulator):
+    """The RGD bit on a distributed string. ``waves`` must be built at this step (waves.h)."""
+
+    def __init__(self, groups: Groups, waves: StringWaves, *, stick_window: float = 4 * math.pi,
+                 hoist_speed_limit: float = math.inf, nodes: int | None = None) -> None:
+        self.waves = waves
+        self._t, self._a = _Line(waves.torsion), _Line(waves.axial)
+        m = max(self._t.n.size, self._a.n.size)
+        self._scratch = np.zeros((4, m))
+        self._slots = np.zeros((2, m), dtype=np.int64)
+        super().__init__(groups, waves.h, stick_window=stick_window,
+                         hoist_speed_limit=hoist_speed_limit, nodes=nodes)
+
+    def _extend(self) -> None:
+        if self._x.size != dk.NXD:
+            self._x = np.concatenate([self._x, np.zeros(dk.NXD - self._x.size)])
+            self._acc = np.concatenate([self._acc, np.zeros(dk.NAD - self._acc.size)])
+            self._no_rows = np.zeros((0, dk.NOD))
+
+    # ---- starts --------------------------------------------------------------------------
+    def start_steady(self, w0: float, omega0: float, perturbation: float = 0.0) -> None:
+        """Steady drilling everywhere: the string turns at omega0 carrying the steady torque
+        (plus the dashpots' share above each), moves at v0 carrying w0; BHA speed perturbed."""
+        self._extend()
+        super().start_steady(w0, omega0, perturbation)
+        st = self.steady_state
+        x = self._x
+        x[kn.X_TS] = self._t.fill_steady(st.t0, omega0)
+        x[dk.X_F_TOP] = self._a.fill_steady(w0, st.v0)
+        x[kn.X_PHI_TD] = self._twist(st.t0, omega0)
+        x[dk.X_T_BOTTOM], x[dk.X_F_BOTTOM], x[dk.X_V_TOP] = st.t0, w0, st.v0
+        x[dk.X_DOM] = x[dk.X_DV] = 0.0
+        x[dk.X_A_PREV] = self._t.buf[self._t.off[-1]]
+
+    def _twist(self, t0: float, omega0: float) -> float:
+        """Twist of the steady string, top angle minus bit angle: sum of T_j D_j / z_j."""
+        line, total, torque = self.waves.torsion, 0.0, t0 + line_c_last(self.waves) * omega0
+        for j in range(line.z.size - 1, -1, -1):
+            total += torque * line.delay[j] / line.z[j]
+            if j > 0:
+                torque += line.dashpot[j - 1] * omega0
+        return total
+
+    @property
+    def steady_state(self):
+        from .stability import steady_state
+        w0, om0 = self.commands
+        return steady_state(self.groups, w0, om0)
+
+    def start_at_rest(self, gap: float = 0.0) -> None:
+        """Bit at rest ``gap`` [L*] above a flat bottom, string relaxed and hanging in static
+        equilibrium (the hook carries the weight), commands zero."""
+        self._extend()
+        super().start_at_rest(gap)
+        self._t.buf[:] = 0.0
+        self._a.buf[:] = 0.0
+        self._x[kn.NX:] = 0.0
+
+    def load_state(self, **_: object) -> None:
+        raise ParameterError("load_state: a distributed string's state is its wave buffers; "
+                             "only start_steady and start_at_rest are supported")
+
+    # ---- stepping ------------------------------------------------------------------------
+    def advance_into(self, n_steps: int, out: np.ndarray, every: int, row: int) -> int:
+        t, a = self._t, self._a
+        row = int(dk.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
+                             t.z, t.n, t.c, t.off, t.buf, a.z, a.n, a.c, a.off, a.buf,
+                             self._scratch, self._slots, n_steps, out, every, row))
+        if self._k[kn.K_REFUSED]:
+            self._refuse_step()
+        return row
+
+    def advance(self, n_steps: int) -> None:
+        self.advance_into(n_steps, self._no_rows, 1, 0)
+
+    def record(self, duration: float, output_interval: float) -> np.ndarray:
+        """Rows (kernel.O_* then distributed_kernel.O_T_BOTTOM..) every ``output_interval``."""
+        n_total = round(duration / self.dt)
+        every = max(1, round(output_interval / self.dt))
+        out = np.empty((n_total // every, dk.NOD))
+        self.start_sample()
+        row = self.advance_into(n_total, out, every, 0)
+        return out[:row]
+
+    # ---- observation ---------------------------------------------------------------------
+    @property
+    def bottom_torque(self) -> float:
+        """The pipe's torque on the BHA over the last step [C]."""
+        return float(self._x[dk.X_T_BOTTOM])
+
+    def energy(self) -> tuple[float, float]:
+        """Stored energy (torsional [C], axial [F* L*]): string waves plus the BHA's kinetic
+        energy (I = 1; M = 1/psi in these units)."""
+        x = self._x
+        return (self._t.energy(self.dt) + 0.5 * x[kn.X_OMEGA] ** 2,
+                self._a.energy(self.dt) + 0.5 * x[kn.X_V] ** 2 / self.groups.psi)
+
+    def damped(self) -> tuple[float, float]:
+        """Energy the dashpots dissipated over the window (torsional [C], axial [F* L*])."""
+        return float(self._acc[dk.A_DAMPED_ROT]), float(self._acc[dk.A_DAMPED_AX])
+
+
+def line_c_last(waves: StringWaves) -> float:
+    """The torsional dashpot acting on the BHA (the last segment's)."""
+    return float(waves.torsion.dashpot[-1])

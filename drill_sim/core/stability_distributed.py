@@ -1,0 +1,169 @@
+"""Linear stability of steady drilling on the distributed string, and its natural frequencies.
+
+Linearised about steady drilling (contact kept, g = 1, the delay perturbed), the lumped
+Delta(s) of the model contract (section 5) becomes, with the pipe's dynamic stiffnesses
+K_t(s) = -m22/m12 (torsion, angle fixed at the top) and K_a(s) = -m21/m11 (axial, force fixed
+at the top) from the sections' transfer matrices (``WaveLine.transfer``),
+
+    Delta_d(s) = (s^2 + psi K_a + n psi E)(s^2 + K_t) - k E (s^2 + psi K_a),
+
+which is Delta(s) for K_t = 1, K_a = 0. K_t and K_a have poles (the clamped string's modes), so
+the roots are sought of the entire function m11_a m12_t Delta_d(s). Root finding: Newton from a
+grid over the box [re_min, re_max] x [-im_max, im_max]; the count is checked against the
+argument principle on the box's edge (the phase sampled until no step turns it by more than
+pi/4); the result says whether they agree. Unlike the lumped Delta, the string has infinitely
+many modes along the imaginary axis, so the box's height bounds the search: roots above
+im_max are not sought (the default box holds every mode below ~3 Hz on base).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .distributed import StringWaves, WaveLine
+from .parameters import Groups, ParameterError
+from .stability import SteadyState, steady_state
+
+
+def simulated(line: WaveLine) -> WaveLine:
+    """The line with the delays the simulation uses (steps * h), for comparisons at 1e-3."""
+    return WaveLine(line.z, line.steps * line.h, line.steps, line.dashpot, line.h)
+
+
+def characteristic(s: np.ndarray | complex, groups: Groups, steady: SteadyState,
+                   waves: StringWaves) -> np.ndarray:
+    """m11_a m12_t Delta_d(s) (entire in s)."""
+    s = np.asarray(s, dtype=complex)
+    n, psi = groups.n, groups.psi
+    k = n * (steady.w0 - groups.lam) / (2.0 * math.pi)
+    e = 1.0 - np.exp(-s * steady.tau_n0)
+    _, t12, _, t22 = waves.torsion.transfer(s)
+    a11, _, a21, _ = waves.axial.transfer(s)
+    s2 = s * s
+    axial = s2 * a11 - psi * a21
+    return (axial + n * psi * e * a11) * (s2 * t12 - t22) - k * e * t12 * axial
+
+
+@dataclass(frozen=True)
+class StringStability:
+    """Roots of Delta_d in the box, rightmost first, without s = 0."""
+
+    steady: SteadyState
+    roots: np.ndarray
+    box: tuple[float, float, float, float]
+    count_argument_principle: int      # roots in the box, s = 0 included
+    complete: bool
+
+    @property
+    def rightmost(self) -> complex:
+        return complex(self.roots[0])
+
+    @property
+    def stable(self) -> bool:
+        return bool(self.roots.size == 0 or self.roots[0].real < 0.0)
+
+
+def string_stability(groups: Groups, waves: StringWaves, w0: float, omega0: float, *,
+                     re_min: float = -0.5, re_max: float = 5.0,
+                     im_max: float = 20.0) -> StringStability:
+    """Every root of Delta_d(s) in [re_min, re_max] x [-im_max, im_max] (see module doc)."""
+    steady = steady_state(groups, w0, omega0)
+    if not re_min < 0.0 < re_max or im_max <= 0.0:
+        raise ParameterError(f"box [{re_min}, {re_max}] x +-{im_max}: expected re_min < 0 < "
+                             "re_max and im_max > 0")
+    box = (re_min, re_max, -im_max, im_max)
+
+    def f(s):
+        return characteristic(s, groups, steady, waves)
+
+    count = _winding_number(box, f)
+    roots = np.empty(0, dtype=complex)
+    for density in (40, 80, 160):
+        roots = _newton_from_grid(box, f, density)
+        if roots.size == count:
+            break
+    nonzero = roots[np.abs(roots) > 1e-7]
+    order = np.lexsort((-nonzero.imag, -np.round(nonzero.real, 9)))
+    return StringStability(steady, nonzero[order], box, count, roots.size == count)
+
+
+def _winding_number(box, f) -> int:
+    x0, x1, y0, y1 = box
+    corners = [complex(x0, y0), complex(x1, y0), complex(x1, y1), complex(x0, y1), complex(x0, y0)]
+    points = 2048
+    while True:
+        path = np.concatenate([np.linspace(corners[i], corners[i + 1], points, endpoint=False)
+                               for i in range(4)] + [np.array([corners[0]])])
+        value = f(path)
+        if np.any(value == 0.0):
+            raise ParameterError("a root lies on the search box edge; change the box")
+        steps = np.diff(np.unwrap(np.angle(value)))
+        if np.max(np.abs(steps)) < math.pi / 4 or points > 2**20:
+            return round(np.sum(steps) / (2.0 * math.pi))
+        points *= 4
+
+
+def _newton_from_grid(box, f, density: int) -> np.ndarray:
+    x0, x1, y0, y1 = box
+    s = (np.linspace(x0, x1, density)[None, :]
+         + 1j * np.linspace(y0, y1, 4 * density)[:, None]).ravel()
+    d = 1e-6
+    with np.errstate(all="ignore"):
+        for _ in range(60):
+            value = f(s)
+            deriv = (f(s + d) - f(s - d)) / (2.0 * d)
+            step = value / deriv
+            step[~np.isfinite(step)] = 0.0
+            s = s - step
+            s = np.where(np.abs(s) > 4.0 * max(abs(x0), x1, y1), np.nan, s)
+        value = f(s)
+        scale = np.abs((f(s + d) - f(s - d)) / (2.0 * d))
+    good = np.isfinite(s) & (np.abs(value) <= 1e-8 * (1.0 + scale) * (1.0 + np.abs(s)))
+    good &= (s.real >= x0) & (s.real <= x1) & (s.imag >= y0) & (s.imag <= y1)
+    found: list[complex] = []
+    for root in s[good]:
+        if all(abs(root - other) > 1e-6 * (1.0 + abs(root)) for other in found):
+            found.append(complex(root))
+    return np.array(found, dtype=complex)
+
+
+def natural_frequencies(waves: StringWaves, psi: float, count: int = 3,
+                        omega_max: float = 60.0) -> tuple[np.ndarray, np.ndarray]:
+    """The undamped string's angular frequencies off bottom [1/t*] (bit free, top speed and hook
+    force held): torsional roots of s^2 m12 - m22 and axial of s^2 m11 - psi m21 at s = i omega
+    (the axial rigid-body mode s = 0 excluded); dashpots are ignored."""
+    def lossless(line: WaveLine) -> WaveLine:
+        return WaveLine(line.z, line.delay, line.steps, 0.0 * line.dashpot, line.h)
+
+    tor, ax = lossless(waves.torsion), lossless(waves.axial)
+
+    def f_t(om):
+        _, m12, _, m22 = tor.transfer(1j * om)
+        return (-om * om * m12 - m22).real
+
+    def f_a(om):
+        m11, _, m21, _ = ax.transfer(1j * om)
+        return (-om * om * m11 - psi * m21).real
+
+    return _real_roots(f_t, count, omega_max), _real_roots(f_a, count, omega_max)
+
+
+def _real_roots(f, count: int, omega_max: float) -> np.ndarray:
+    """The first ``count`` sign changes of f on (0, omega_max], refined by bisection (poles of
+    the dynamic stiffness are not roots: f is the pole-free numerator)."""
+    grid = np.linspace(1e-6, omega_max, 200_000)
+    values = f(grid)
+    idx = np.nonzero(np.sign(values[1:]) != np.sign(values[:-1]))[0][:count]
+    roots = []
+    for i in idx:
+        lo, hi = grid[i], grid[i + 1]
+        f_lo = f(np.array([lo]))[0]
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            f_mid = f(np.array([mid]))[0]
+            lo, hi, f_lo = (mid, hi, f_mid) if np.sign(f_mid) == np.sign(f_lo) else (lo, mid, f_lo)
+        roots.append(0.5 * (lo + hi))
+    return np.array(roots)

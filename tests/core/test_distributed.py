@@ -1,0 +1,165 @@
+"""The distributed string against theory: natural frequencies, wave travel and reflection,
+growth at the rightmost root of Delta_d, the lumped limit, the energy balance and the
+stationary averages. Times in t*; the base scales (t* from the lumped C and I)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from drill_sim.core import Simulator, load_preset
+from drill_sim.core import distributed_kernel as dk
+from drill_sim.core import kernel as kn
+from drill_sim.core.distributed import Section, StringWaves, geometry_waves, string_waves
+from drill_sim.core.distributed_simulator import StringSimulator
+from drill_sim.core.stability_distributed import natural_frequencies, simulated, string_stability
+
+H = 5e-4
+
+
+def _preset(name):
+    p = load_preset(name)
+    return p, p.rig.groups, geometry_waves(p.rig, p.string, H)
+
+
+def _peak(x, dt, near):
+    """The spectral peak of x within 5 % of ``near`` [rad/t*], Hann window, zero padding and
+    a parabola through the log magnitudes."""
+    x = (x - x.mean()) * np.hanning(x.size)
+    n = 1 << 21
+    spec = np.log(np.abs(np.fft.rfft(x, n)) + 1e-300)
+    om = 2 * math.pi * np.fft.rfftfreq(n, dt)
+    band = np.nonzero(np.abs(om - near) < 0.05 * near)[0]
+    i = band[np.argmax(spec[band])]
+    y0, y1, y2 = spec[i - 1:i + 2]
+    return om[i] + 0.5 * (y0 - y2) / (y0 - 2 * y1 + y2) * (om[1] - om[0])
+
+
+@pytest.mark.parametrize("name", ["base", "deep"])
+def test_natural_frequencies_off_bottom(name):
+    """(1) The first three torsional and two axial modes of the free string, measured from
+    the simulated pipe torque and force on the BHA, against the roots of the frequency
+    equation with the geometry's exact travel times (0.5 %)."""
+    _p, groups, waves = _preset(name)
+    tors, axial = natural_frequencies(waves, groups.psi, count=3)
+    sim = StringSimulator(groups, waves)
+    sim.start_at_rest(gap=1e9)                    # far off bottom: the bit is free
+    sim.set_commands(0.0, 0.1)                    # a step of top-drive speed: every mode
+    sim.advance(round(0.3 / H))
+    sim.set_commands(0.0, 0.0)                    # ... and a push of the hook force
+    sim.set_commands(1.0, 0.1)
+    sim.advance(round(0.3 / H))
+    sim.set_commands(0.0, 0.1)
+    rows = sim.record(1500.0, 0.02)
+    for i, om in enumerate(tors):
+        assert _peak(rows[:, dk.O_T_BOTTOM], 0.02, om) == pytest.approx(om, rel=5e-3), i
+    for i, om in enumerate(axial[:2]):
+        assert _peak(rows[:, dk.O_F_BOTTOM], 0.02, om) == pytest.approx(om, rel=5e-3), i
+
+
+def test_wave_travel_and_section_change():
+    """(2) A step of top-drive speed reaches the BHA after sum L_i/c_i (one step), the speed
+    transmitted into the lower section is 2 Z1/(Z1 + Z2) of it and the reflection seen at the
+    top (Z1 - Z2)/(Z1 + Z2) (1 %)."""
+    p = load_preset("base")
+    sections = (Section(600.0, 0.127, 0.108), Section(400.0, 0.1397, 0.1086))
+    waves = string_waves(p.rig, sections, H)
+    z1, z2 = waves.torsion.z
+    sim = StringSimulator(p.rig.groups, waves)
+    sim.start_at_rest(gap=1e9)
+    sim.set_commands(0.0, 0.1)
+    d1, d2 = waves.torsion.delay
+    rows = sim.record(2 * d1 + 0.2, H)
+    arrival = np.argmax(np.abs(rows[:, dk.O_T_BOTTOM]) > 0.0) * H     # step k ends at (k+1) h
+    assert abs(arrival - (d1 + d2)) <= H
+    first = rows[np.argmax(np.abs(rows[:, dk.O_T_BOTTOM]) > 0.0), dk.O_T_BOTTOM]
+    assert first / (2 * z2 * 0.1) == pytest.approx(2 * z1 / (z1 + z2), rel=1e-2)
+    back = rows[round((2 * d1 + 0.1) / H), kn.O_TS]                  # the top after 2 D1
+    assert (z1 * 0.1 - back) / (2 * z1 * 0.1) == pytest.approx((z1 - z2) / (z1 + z2), rel=1e-2)
+    assert rows[round(d1 / H), kn.O_TS] == pytest.approx(z1 * 0.1, rel=1e-12)   # before it
+
+
+GROWTH = [("base", 9.6, 1.32, 30.0, 12.0), ("base", 12.0, 4.0, 30.0, 12.0),
+          ("deep", 28.8, 4.0, 12.0, 5.0)]
+
+
+@pytest.mark.parametrize("name, w0, omega0, duration, fit_from", GROWTH)
+def test_growth_at_the_rightmost_root(name, w0, omega0, duration, fit_from):
+    """(3) A 1e-12 perturbation of steady drilling grows at the rightmost root of Delta_d
+    (1e-3 in Re s and Im s; the travel times as simulated)."""
+    _p, groups, waves = _preset(name)
+    res = string_stability(groups, StringWaves(simulated(waves.torsion),
+                                               simulated(waves.axial), H), w0, omega0)
+    assert res.complete
+    root = res.rightmost
+    sim = StringSimulator(groups, waves)
+    sim.start_steady(w0, omega0, 1e-12)
+    rows = sim.record(duration, 0.01)
+    x = rows[rows[:, kn.O_TAU] >= fit_from, kn.O_OMEGA] - omega0
+    assert np.max(np.abs(x)) < 1e-2 * omega0                        # still linear
+    order = 6                                                         # three pairs of roots
+    a = np.column_stack([x[order - 1 - i:x.size - 1 - i] for i in range(order)])
+    c = np.linalg.lstsq(a, x[order:], rcond=None)[0]
+    est = np.log(np.roots(np.concatenate([[1.0], -c])).astype(complex)) / 0.01
+    s = est[np.argmin(np.abs(est - root))]
+    assert s.real == pytest.approx(root.real, rel=1e-3)
+    assert s.imag == pytest.approx(root.imag, rel=1e-3)
+
+
+def test_light_pipe_is_the_lumped_model():
+    """(4) A pipe of negligible inertia (density 1e-4 of steel's, stiffness kept) follows the
+    lumped model's trajectory while perturbations grow (bit speed within 1e-4 over 10 t*,
+    where the perturbation itself reaches ~1e-2): the pipe's bottom torque is C (phi_td - phi).
+    Stationary stick-slip statistics are NOT yet within 1 % (see msg_docs/model.md)."""
+    p = load_preset("base")
+    groups = p.rig.groups
+    waves = string_waves(p.rig, (Section(1000.0, 0.127, 0.108),), H, steel_density_kg_m3=0.8)
+    assert waves.pipe_inertia < 1e-3
+    lumped = Simulator(groups, H)
+    string = StringSimulator(groups, waves)
+    out = []
+    for sim in (lumped, string):
+        sim.start_steady(9.6, 1.32, 1e-3)
+        out.append(sim.run(10.0, output_interval=0.05))
+    grown = np.max(np.abs(out[0].omega - 1.32))
+    assert grown > 1e-2
+    assert np.max(np.abs(out[1].omega - out[0].omega)) < 2e-2 * grown
+    assert np.max(np.abs(out[1].w - out[0].w)) < 2e-3
+
+
+@pytest.mark.parametrize("damping", [0.0, 0.3])
+def test_energy_balance_in_stick_slip(damping):
+    """(5) Work of the top drive = stored energy change + bit and dashpot dissipation, and
+    likewise axially for the hook force (0.5 %), over a stick-slip run."""
+    p = load_preset("base")
+    waves = geometry_waves(p.rig, p.string, H, torsional_damping=damping)
+    sim = StringSimulator(p.rig.groups, waves)
+    sim.start_steady(9.6, 1.32, 1e-3)
+    sim.run(100.0)
+    sim.reset_window()
+    e0 = sim.energy()
+    m = sim.run(100.0).metrics
+    e1 = sim.energy()
+    damped = sim.damped()
+    assert m.stick_fraction > 0.05 or damping > 0.0
+    rot = m.dissipated_rotation + damped[0] + e1[0] - e0[0]
+    assert rot == pytest.approx(m.work_top_drive, rel=5e-3)
+    ax = m.dissipated_axial + damped[1] + e1[1] - e0[1]
+    assert ax == pytest.approx(m.work_weight + m.work_hoist, rel=5e-3)
+    if damping:
+        assert damped[0] > 0.05 * m.work_top_drive
+
+
+def test_averages_in_stationary_stick_slip():
+    """(7) <Omega_bit> = Omega0 and <W> = W0 in stationary stick-slip (1 %)."""
+    _p, groups, waves = _preset("base")
+    sim = StringSimulator(groups, waves)
+    sim.start_steady(9.6, 1.32, 1e-3)
+    sim.run(300.0)
+    sim.reset_window()
+    m = sim.run(400.0).metrics
+    assert m.stick_fraction > 0.05
+    assert m.mean_bit_speed == pytest.approx(1.32, rel=1e-2)
+    assert m.mean_wob == pytest.approx(9.6, rel=1e-2)
