@@ -6,11 +6,11 @@ speed [rad/s] (``"speed"``). Plain Python floats in ``__slots__``: a step alloca
 beyond its result, which is cheap enough at 1 kHz.
 
 Common to the torque laws: output limits [torque_min_nm, torque_max_nm]; anti-windup by
-conditional integration (the integral does not grow while the output is saturated in the
-direction the error pushes) plus clamping of the integral term itself to the limits, so the
-output leaves a limit on the first sample after the error changes sign; and bumpless start:
-``bumpless_start(current_output, measurement)`` loads the integral so that its first output
-equals the torque the drive is applying now.
+conditional integration (while the output is saturated in the direction the error pushes,
+the integral grows no further than to put the output on the limit) plus clamping of the
+integral term itself to the limits, so the output leaves a limit on the first sample after
+the error changes sign; and bumpless start: ``bumpless_start(current_output, measurement)``
+loads the integral so that its first output equals the torque the drive is applying now.
 """
 
 from __future__ import annotations
@@ -68,9 +68,12 @@ class PI:
     def output(self, error_rad_s: float, feedforward_nm: float = 0.0) -> float:
         p = self.kp_nm_s_rad * error_rad_s + feedforward_nm
         q = self.q_nm + self.ki_nm_rad * self.h_s * error_rad_s
-        if (p + q > self.torque_max_nm and error_rad_s > 0.0) or \
-                (p + q < self.torque_min_nm and error_rad_s < 0.0):
-            q = self.q_nm                      # conditional integration: no wind-up
+        # Conditional integration: while the error pushes into a limit, q grows only up to
+        # what brings the output onto the limit, never beyond (no wind-up).
+        if p + q > self.torque_max_nm and error_rad_s > 0.0:
+            q = max(self.q_nm, self.torque_max_nm - p)
+        elif p + q < self.torque_min_nm and error_rad_s < 0.0:
+            q = min(self.q_nm, self.torque_min_nm - p)
         q = min(max(q, self.torque_min_nm), self.torque_max_nm)
         self.q_nm = q
         return min(max(p + q, self.torque_min_nm), self.torque_max_nm)
