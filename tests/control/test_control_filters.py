@@ -1,0 +1,109 @@
+"""Filters, tuning helpers and gain validation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from drill_sim.control import (
+    FilteredDerivative,
+    FirstOrderSection,
+    ParameterError,
+    auto_tune_soft_speed,
+    dominant_frequency_hz,
+    first_mode_frequency_hz,
+    make_law,
+    pipe_impedance,
+)
+from drill_sim.core import load_preset
+
+
+def _gain(section, f_hz: float, h_s: float) -> float:
+    """Steady-state amplitude ratio for a sine, measured by running the filter on it."""
+    n = round(40.0 / (f_hz * h_s))                 # 40 periods; the last 20 are measured
+    t = np.arange(n) * h_s
+    y = np.array([section.step(math.sin(2 * math.pi * f_hz * tk)) for tk in t])
+    tail = slice(n // 2, n)
+    basis = np.column_stack([np.sin(2 * math.pi * f_hz * t[tail]),
+                             np.cos(2 * math.pi * f_hz * t[tail])])
+    coef = np.linalg.lstsq(basis, y[tail], rcond=None)[0]
+    return float(np.hypot(*coef))
+
+
+@pytest.mark.parametrize("h_s", [0.01, 0.001])
+@pytest.mark.parametrize(("corner_hz", "highpass"), [(2.5, False), (10.0, False), (0.5, True)])
+def test_corner_gain_is_one_over_root_two(h_s, corner_hz, highpass):
+    section = FirstOrderSection(corner_hz, h_s, highpass=highpass)
+    assert _gain(section, corner_hz, h_s) == pytest.approx(1 / math.sqrt(2), rel=0.01)
+    far = corner_hz / 20 if not highpass else corner_hz * 20   # pass band
+    assert _gain(FirstOrderSection(corner_hz, h_s, highpass=highpass), far, h_s) == \
+        pytest.approx(1.0, rel=0.01)
+
+
+@pytest.mark.parametrize("h_s", [0.01, 0.001])
+def test_filtered_derivative_is_a_derivative_below_its_corner(h_s):
+    f_hz = 0.2
+    gain = _gain(FilteredDerivative(5.0, h_s), f_hz, h_s)
+    assert gain == pytest.approx(2 * math.pi * f_hz / math.hypot(1, f_hz / 5.0), rel=0.01)
+
+
+def test_base_pipe_impedance_is_302():
+    base = load_preset("base")
+    assert pipe_impedance(base) == pytest.approx(302.0, rel=0.005)
+    assert pipe_impedance("base") == pipe_impedance(base.string)
+
+
+def test_first_mode_frequency_from_the_lumped_parameters():
+    rig = load_preset("base").rig
+    c, i = rig.torsional_stiffness_nm_per_rad, rig.bha_inertia_kg_m2
+    assert first_mode_frequency_hz(rig) == pytest.approx(math.sqrt(c / i) / (2 * math.pi))
+    assert first_mode_frequency_hz("base", 2900.0) == pytest.approx(
+        math.sqrt(c * (1 / i + 1 / 2900.0)) / (2 * math.pi))
+
+
+@pytest.mark.parametrize("f_hz", [0.17, 0.76, 1.3])
+def test_auto_tune_finds_a_known_frequency_in_a_noisy_torque(f_hz):
+    """A stick-slip-like torque (fundamental and harmonics), trend and noise, 60 s at 100 Hz."""
+    rng = np.random.default_rng(7)
+    h = 0.01
+    t = np.arange(6000) * h
+    phase = 2 * math.pi * f_hz * t + rng.uniform(0, 2 * math.pi)
+    torque = (8000 + 30 * t + 1500 * np.sin(phase) + 500 * np.sin(2 * phase + 1)
+              + 200 * np.sin(3 * phase + 2) + rng.normal(0, 400, t.size))
+    assert dominant_frequency_hz(torque, h) == pytest.approx(f_hz, rel=0.01)
+    gains = auto_tune_soft_speed(torque, h, 302.0, 2900.0)
+    assert gains.ki_nm_rad == pytest.approx((2 * math.pi * f_hz) ** 2 * 2900.0, rel=0.021)
+    assert gains.kp_nm_s_rad == pytest.approx(4 * 302.0)
+
+
+@pytest.mark.parametrize(("name", "gains", "bad"), [
+    ("stiff_pi", {"kp_nm_s_rad": float("nan")}, "kp_nm_s_rad"),
+    ("stiff_pi", {"ki_nm_rad": -1.0}, "ki_nm_rad"),
+    ("stiff_pi", {"torque_max_nm": float("inf")}, "torque_max_nm"),
+    ("stiff_pi", {"torque_min_nm": 10.0, "torque_max_nm": 5.0}, "torque_max_nm"),
+    ("soft_speed", {"tuning_frequency_hz": 0.0}, "tuning_frequency_hz"),
+    ("soft_speed", {"compensated_inertia_kg_m2": 2900.0}, "compensated_inertia_kg_m2"),
+    ("soft_speed", {"kp_over_impedance": float("inf")}, "kp_over_impedance"),
+    ("z_torque", {"alpha": -0.1}, "alpha"),
+    ("z_torque", {"torque_lowpass_hz": 60.0}, "torque_lowpass_hz"),   # above 50 Hz Nyquist
+    ("z_torque", {"highpass_hz": 3.0}, "highpass_hz"),                # above the 2.5 Hz LPF
+    ("z_torque", {"speed_lowpass_hz": "fast"}, "speed_lowpass_hz"),
+    ("stiff_pi", {"gain": 1.0}, "gain"),                              # unknown
+    ("kinematic", {"alpha": 1.0}, "alpha"),
+])
+def test_bad_gains_are_refused_by_name(name, gains, bad):
+    with pytest.raises(ParameterError, match=bad):
+        make_law(name, 0.01, 302.0, 2900.0, **gains)
+
+
+@pytest.mark.parametrize(("args", "bad"), [
+    (("stiff_pi", 0.0, 302.0, 2900.0), "h_s"),
+    (("stiff_pi", 0.01, float("nan"), 2900.0), "impedance_nm_s_rad"),
+    (("z_torque", 0.01, 302.0, -1.0), "top_drive_inertia_kg_m2"),
+    (("pid", 0.01, 302.0, 2900.0), "pid"),
+])
+def test_bad_law_arguments_are_refused_by_name(args, bad):
+    with pytest.raises(ValueError, match=bad):
+        make_law(*args)
