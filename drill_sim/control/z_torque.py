@@ -18,8 +18,8 @@ integral carries) so that only oscillations are fed back; the two LPF_T stages k
 differentiated speed's noise small: white speed noise σ sampled at f_s gives T̂_p a noise below
 J_TD ωc σ (ωc = 2π·2.5 Hz, the filtered derivative's largest gain) and T̃ about
 J_TD σ √(ωc³/(4 f_s)) -- 28 N·m for 0.01 rad/s at 1 kHz, against J_TD √2 σ/h = 41 kN·m for a
-raw difference. The corners suit stick-slip at 0.1-0.8 Hz (lag of the T path under 30°); keep
-``torque_lowpass_hz`` at least three times the stick-slip frequency.
+raw difference. The corners suit stick-slip at 0.1-0.76 Hz (the T path's phase within 30° of
+zero); keep ``torque_lowpass_hz`` at least three times the stick-slip frequency.
 """
 
 from __future__ import annotations
