@@ -55,3 +55,20 @@ def test_map_passes_the_string_model_to_every_point(tmp_path):
     assert "distributed" in json.dumps(description)
     assert out.read_text() != (tmp_path / "l.csv").read_text()
 
+
+def test_stability_distributed_roots_check_and_frequencies():
+    """The rightmost roots of Delta_d, complete by the argument principle on the box (whose
+    height bounds the search, as the text says), and the off-bottom frequencies of base."""
+    out = json.loads(run("stability", "--string-model", "distributed", "--json").stdout)
+    assert out["string_model"] == "distributed" and out["complete"] and not out["stable"]
+    assert out["roots_found"] == out["roots_counted"] > 0
+    re, _im = out["roots"][0]
+    assert re == max(r[0] for r in out["roots"]) > 0
+    assert "argument principle" in out["completeness"] and "not searched" in out["completeness"]
+    assert out["torsional_frequencies_hz"] == pytest.approx([0.555, 1.830, 3.271], abs=2e-3)
+    assert out["axial_frequencies_hz"] == pytest.approx([1.858, 4.078], abs=2e-3)
+    text = run("stability", "--string-model", "distributed").stdout
+    assert "argument principle" in text and "not searched" in text
+    assert "torsional 0.555, 1.830, 3.271 Hz; axial 1.858, 4.078 Hz" in text
+    lumped = json.loads(run("stability", "--json").stdout)
+    assert "string_model" not in lumped and lumped["complete"]
