@@ -77,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
                              f"{grid.y_values.size} points; expected at least two values of "
                              f"{grid.x.option} and of {grid.y.option}")
     points = [run_settings(grid.case(p), timing, args.start, gap, perturbation,
-                           where=f" at {grid.label(p)}") for p in range(grid.size)]
+                           where=f" at {grid.label(p)}", string_model=args.string_model)
+              for p in range(grid.size)]
     _preflight(grid, points)
 
     columns = ["point", grid.x.column, grid.y.column, *metric_units(grid.si)]

@@ -57,13 +57,15 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         plot_file("--plot", args.plot)
     gap, perturbation = resolve_start(args, case)
-    settings = run_settings(case, timing, args.start, gap, perturbation)
+    settings = run_settings(case, timing, args.start, gap, perturbation,
+                            string_model=args.string_model)
 
     progress = Progress("simulating")
     result = run_single(settings, output_interval=interval / timing.t_star_s if keep_rows
                         else None, progress=progress)   # None: keep no samples
     progress.close()
     summary = _summary(case, result.parts[-1], settings.start, duration, timing.window, dt)
+    summary["string_model"] = settings.string_model
 
     if keep_rows:
         columns = _columns(case, *result.parts)
@@ -169,7 +171,8 @@ def _plot(path: Path, case: Case, cols: dict[str, np.ndarray]) -> None:
 def _print_summary(s: dict, args: argparse.Namespace) -> None:
     u = s["units"]
     lines = [f"drill_sim simulate: {s.get('preset', 'groups')} ({s['mode']}), start {s['start']}, "
-             f"{s['duration']:g} {u['time']} at dt = {s['dt']:.3g} {u['time']}",
+             f"{s['duration']:g} {u['time']} at dt = {s['dt']:.3g} {u['time']}, "
+             f"{s['string_model']} string",
              f"metrics over {s['metrics_window'][0]:g}..{s['metrics_window'][1]:g} {u['time']}:"]
     if s["mode"] == "si":
         lines += [

@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass
 
 from ..core import DEFAULT_DT, NoSteadyDrilling, steady_state
+from ..core.distributed import STRING_MODELS, geometry_waves
 from ..study.single import RunSettings, default_start
 from .case import Case
 from .checks import in_range, number, typed
@@ -27,7 +28,8 @@ STEPS_PER_S = 20e6             # for the time estimate in a refusal
 GAP_MAX_M = 10.0               # bit height above bottom, SI [m]
 GAP_MAX = 1e4                  # the same, dimensionless [L*]
 PERTURBATION_RANGE = (-0.9, 1.0)
-RUN_OPTIONS = ("start", "gap", "perturbation")   # as typed; the times are in ``Timing``
+RUN_OPTIONS = ("start", "gap", "perturbation",   # as typed; the times are in ``Timing``
+               "string_model")
 
 
 @dataclass(frozen=True)
@@ -60,6 +62,9 @@ def add_run_arguments(parser: argparse.ArgumentParser, *, duration_default: str)
     parser.add_argument("--perturbation", type=number, default=1e-3,
                         help="relative perturbation of the initial bit speed (steady start), "
                              f"{PERTURBATION_RANGE[0]:g} to {PERTURBATION_RANGE[1]:g}")
+    parser.add_argument("--string-model", choices=STRING_MODELS, default=None,
+                        help="the drill string: lumped spring or distributed pipe (SI mode "
+                             "only, from the preset's geometry); default: the preset's, lumped")
 
 
 def resolve_timing(args: argparse.Namespace, case: Case, default_s: float,
@@ -88,10 +93,11 @@ def resolve_start(args: argparse.Namespace, case: Case) -> tuple[float, float]:
 
 
 def run_settings(case: Case, timing: Timing, start: str | None, gap: float,
-                 perturbation: float, *, where: str = "") -> RunSettings:
+                 perturbation: float, *, where: str = "",
+                 string_model: str | None = None) -> RunSettings:
     """The run of ``case``: ``start`` None picks steady drilling when it exists; ``gap`` is in
     m (SI) or L*. A steady start where there is none is a UsageError (``where`` names the
-    point, for a map)."""
+    point, for a map). ``string_model`` None is the preset's (lumped in groups mode)."""
     speed = "--rpm" if case.si else "--omega0"
     start = start or default_start(case.groups, case.w0, case.omega0)
     if start == "steady" and case.omega0 == 0:
@@ -107,7 +113,24 @@ def run_settings(case: Case, timing: Timing, start: str | None, gap: float,
         groups=case.groups, w0=case.w0, omega0=case.omega0, dt=timing.dt / t_star,
         lead=(timing.duration - timing.window) / t_star, window=timing.window / t_star,
         start=start, gap=gap / case.preset.rig.scales.length_m if case.si else gap,
-        perturbation=perturbation)
+        perturbation=perturbation, waves=string_waves(case, string_model, timing.dt / t_star))
+
+
+def string_waves(case: Case, string_model: str | None, dt: float):
+    """The distributed string of ``case`` at step ``dt`` [t*], or None for the lumped one;
+    a UsageError where there is no pipe geometry (groups mode, a ``lumped:`` preset)."""
+    model = string_model or (case.preset.string_model if case.si else "lumped")
+    if model == "lumped":
+        return None
+    if not case.si:
+        raise UsageError("--string-model distributed with --groups: the distributed string "
+                         "needs the pipe's geometry, which the groups do not give; expected "
+                         "--preset (SI mode) or --string-model lumped")
+    if case.preset.string is None:
+        raise UsageError(f"--string-model distributed with preset {case.preset.name!r}: it gives "
+                         "'lumped' C, I, M, W_s, not the pipe's geometry; expected a preset "
+                         "with a 'string' section or --string-model lumped")
+    return geometry_waves(case.preset.rig, case.preset.string, dt)
 
 
 def _duration(args: argparse.Namespace, dt: float, unit: str, default: float) -> float:

@@ -6,9 +6,11 @@ import argparse
 import math
 
 from ..core import RPM, Groups, NoSteadyDrilling, ParameterError, stability, steady_state
+from ..core.distributed import STRING_MODELS
 from .case import OMEGA0_MAX, RPM_MAX, Case, add_model_arguments, resolve_case
 from .checks import in_range, integer, json_line, number, typed
 from .errors import UsageError
+from .stability_string import run_distributed
 
 # The documented limits (msg_docs/cli.md, "Limits").
 RE_MIN_RANGE = (-100.0, -1e-6)     # left edge of the search box [1/t*]
@@ -23,6 +25,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--count", type=integer, default=8, help="how many roots to print")
     parser.add_argument("--json", action="store_true",
                         help="print the result as one JSON object (strict: null, never NaN)")
+    parser.add_argument("--string-model", choices=STRING_MODELS, default=None,
+                        help="lumped: the roots of Delta(s); distributed (SI mode): those of "
+                             "Delta_d(s) and the string's natural frequencies; default: the "
+                             "preset's")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -43,6 +49,9 @@ def run(args: argparse.Namespace) -> int:
         else:
             print(str(exc))
         return 0
+    model = args.string_model or (case.preset.string_model if case.si else "lumped")
+    if model == "distributed":
+        return run_distributed(args, case, steady, re_min)
     _check_root_search(args, case, re_min)
     try:
         res = stability(case.groups, case.w0, case.omega0, re_min=re_min)

@@ -3,6 +3,8 @@
 A preset file has a ``bit`` section (bit and rock, SI), either a ``string`` section (pipe and
 collar geometry, from which C, I, M and W_s are computed) or a ``lumped`` section (those four
 directly), and optional default ``commands`` (``top_drive_speed_rpm``, ``weight_on_bit_kn``).
+An optional ``string_model: lumped | distributed`` (default lumped) picks the string's model;
+``distributed`` needs the ``string`` geometry.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ import math
 from dataclasses import dataclass, fields
 from pathlib import Path
 
+from .distributed import check_string_model
 from .parameters import ParameterError, RigParameters, StringGeometry, check_number
 from .resources import read_yaml, shipped_names
 
@@ -31,6 +34,7 @@ class Preset:
     string: StringGeometry | None
     top_drive_speed_rpm: float
     weight_on_bit_kn: float
+    string_model: str = "lumped"      # "lumped" or "distributed" (needs ``string``)
 
     @property
     def top_drive_speed_rad_s(self) -> float:
@@ -68,10 +72,11 @@ def preset_from_dict(name: str, data: object) -> Preset:
         lumped = _section(name, data, "lumped", _LUMPED_KEYS, required=True)
     commands = _section(name, data, "commands", ("top_drive_speed_rpm", "weight_on_bit_kn"),
                         required=False, need=())
-    unknown = set(data) - {"description", "bit", "string", "lumped", "commands"}
+    unknown = set(data) - {"description", "bit", "string", "lumped", "commands", "string_model"}
     if unknown:
         raise ParameterError(f"preset {name!r}: unknown section(s) {sorted(unknown)}; expected "
-                             "description, bit, string or lumped, commands")
+                             "description, bit, string or lumped, commands, string_model")
+    string_model = _string_model(name, data.get("string_model", "lumped"), string)
     return Preset(
         name=name,
         description=str(data.get("description", "")),
@@ -81,7 +86,20 @@ def preset_from_dict(name: str, data: object) -> Preset:
                                          commands.get("top_drive_speed_rpm", 60.0)),
         weight_on_bit_kn=check_number("weight_on_bit_kn", commands.get("weight_on_bit_kn", 100.0),
                                       low_inclusive=True),
+        string_model=string_model,
     )
+
+
+def _string_model(name: str, value: object, string: StringGeometry | None) -> str:
+    """The preset's ``string_model``, checked; ``distributed`` needs the string geometry."""
+    try:
+        model = check_string_model(value)
+    except ParameterError as exc:
+        raise ParameterError(f"preset {name!r}: {exc}") from None
+    if model == "distributed" and string is None:
+        raise ParameterError(f"preset {name!r}: string_model = 'distributed' needs a 'string' "
+                             "section (pipe geometry); a 'lumped' section has none")
+    return model
 
 
 def _section(name: str, data: dict, key: str, allowed: tuple[str, ...], *, required: bool,

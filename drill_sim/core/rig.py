@@ -10,7 +10,9 @@ import math
 from typing import NamedTuple
 
 from . import kernel as kn
-from .parameters import ParameterError, RigParameters, check_number
+from .distributed import check_string_model, geometry_waves
+from .distributed_simulator import StringSimulator
+from .parameters import ParameterError, RigParameters, StringGeometry, check_number
 from .simulator import DEFAULT_DT, STEPS_PER_PERIOD, Simulator, fastest_period, max_step
 from .stability import SteadyState, steady_state
 
@@ -64,24 +66,37 @@ class Rig:
 
     dt_s: fixed step [s] (default DEFAULT_DT t*); stick_window_s: how long the stick-slip flag
     stays up after a stick [s] (default two torsional periods, 4 pi t*); hoist_speed_limit_m_s:
-    the string rises no faster (default unlimited).
+    the string rises no faster (default unlimited). string_model: ``lumped`` (default) or
+    ``distributed`` (a ``StringSimulator`` of ``geometry``, the preset's ``string``, at the same
+    step; the SI face is the same, but ``replace_parameters`` is refused).
     """
 
     def __init__(self, params: RigParameters, dt_s: float | None = None, *,
                  stick_window_s: float | None = None,
-                 hoist_speed_limit_m_s: float = math.inf) -> None:
+                 hoist_speed_limit_m_s: float = math.inf, string_model: str = "lumped",
+                 geometry: StringGeometry | None = None) -> None:
         self.params = params
+        self.string_model = check_string_model(string_model)
         self.scales = params.scales
         self.groups = params.groups
         ts = self.scales.time_s
         dt = DEFAULT_DT if dt_s is None else check_number("dt_s", dt_s) / ts
         _check_step(dt * ts, params)
-        self.sim = Simulator(self.groups, dt)
+        self.sim = self._simulator(dt, geometry)
         self.set_stick_window(4.0 * math.pi * ts if stick_window_s is None else stick_window_s)
         self.set_hoist_speed_limit(hoist_speed_limit_m_s)
         self._hook_load_n = params.submerged_weight_n
         self._speed_rad_s = 0.0
         self._forget_samples()
+
+    def _simulator(self, dt: float, geometry: StringGeometry | None) -> Simulator:
+        """The lumped ``Simulator`` or, for the distributed model, a ``StringSimulator``."""
+        if self.string_model == "lumped":
+            return Simulator(self.groups, dt)
+        if geometry is None:
+            raise ParameterError("string_model = 'distributed' needs geometry: the preset's "
+                                 "string (a StringGeometry); a preset with 'lumped' has none")
+        return StringSimulator(self.groups, geometry_waves(self.params, geometry, dt))
 
     # ---- conversions --------------------------------------------------------------------
     @property
@@ -114,6 +129,10 @@ class Rig:
             raise ParameterError(f"blade_count cannot change while running "
                                  f"({self.params.blade_count} -> {params.blade_count}): "
                                  "it changes the rock surface's sector; reset instead")
+        if self.string_model != "lumped":
+            raise ParameterError("replace_parameters: not available with string_model = "
+                                 "'distributed' (its state is the pipe's wave buffers, which "
+                                 "cannot be carried to new parameters); make a new Rig")
         _check_step(self.dt_s, params)
         old, new = self.scales, params.scales
         s = self.sim.state()

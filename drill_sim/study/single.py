@@ -13,6 +13,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from ..core import Groups, Metrics, Simulator, Trajectory
+from ..core.distributed import StringWaves
+from ..core.distributed_simulator import StringSimulator
 
 STARTS = ("steady", "rest")
 
@@ -33,6 +35,11 @@ class RunSettings:
     start: str = "steady"      # "steady": exact steady drilling; "rest": bit at rest
     gap: float = 0.0           # with start "rest": bit height above bottom [L*]
     perturbation: float = 1e-3  # relative perturbation of the initial bit speed (steady start)
+    waves: StringWaves | None = None  # the distributed string at step dt; None: lumped string
+
+    @property
+    def string_model(self) -> str:
+        return "lumped" if self.waves is None else "distributed"
 
     @property
     def steps(self) -> int:
@@ -59,7 +66,7 @@ def run_single(settings: RunSettings, *, output_interval: float | None = None,
     """Run ``settings``; keep samples every ``output_interval`` [t*] (None: none);
     ``progress(fraction)`` is called between chunks."""
     s = settings
-    sim = Simulator(s.groups, s.dt)
+    sim = Simulator(s.groups, s.dt) if s.waves is None else StringSimulator(s.groups, s.waves)
     if s.start == "steady":
         sim.start_steady(s.w0, s.omega0, s.perturbation)
     else:

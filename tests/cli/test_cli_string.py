@@ -1,0 +1,74 @@
+"""``--string-model``: the distributed string from the command line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+
+import pytest
+from conftest import installed
+
+
+def run(*args: str, check: bool = True) -> subprocess.CompletedProcess:
+    proc = subprocess.run([installed("drill_sim"), *args], capture_output=True, text=True,
+                          timeout=300)
+    if check:
+        assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+def test_simulate_distributed_differs_from_lumped_and_keeps_the_mean_speed():
+    """On base at 60 rpm / 100 kN the pipe's inertia changes the stick-slip (stick fraction
+    0.11 against 0.43), while <Omega> = Omega0 holds (1 %)."""
+    common = ("simulate", "--preset", "base", "--rpm", "60", "--wob-kn", "100", "--duration",
+              "120", "--json")
+    lumped = json.loads(run(*common).stdout)
+    string = json.loads(run(*common, "--string-model", "distributed").stdout)
+    assert lumped["string_model"] == "lumped" and string["string_model"] == "distributed"
+    assert abs(string["stick_fraction"] - lumped["stick_fraction"]) > 0.1
+    assert string["mean_bit_speed"] == pytest.approx(string["top_drive_speed"], rel=1e-2)
+    assert string["mean_wob"] == pytest.approx(100e3, rel=1e-2)
+
+
+def test_simulate_distributed_from_rest():
+    proc = run("simulate", "--string-model", "distributed", "--start", "rest", "--gap", "1",
+               "--wob-kn", "0", "--duration", "5", "--json")
+    out = json.loads(proc.stdout)
+    assert out["start"] == "rest" and out["stick_fraction"] == 0.0
+
+
+def test_distributed_in_groups_mode_is_refused():
+    proc = run("simulate", "--groups", "n=4,psi=13.73,lambda=6.84,beta=0.36", "--w0", "9.6",
+               "--omega0", "1.32", "--string-model", "distributed", check=False)
+    assert proc.returncode == 2
+    (line,) = proc.stderr.strip().splitlines()
+    assert "--string-model distributed with --groups" in line and "geometry" in line
+
+
+def test_map_passes_the_string_model_to_every_point(tmp_path):
+    out = tmp_path / "m.csv"
+    args = ("map", "--rpm", "60,120", "--wob-kn", "100", "--duration", "20", "--workers", "1",
+            "--out")
+    run(*args, str(out), "--string-model", "distributed")
+    run(*args, str(tmp_path / "l.csv"))
+    description = json.loads(out.with_suffix(".json").read_text())
+    assert "distributed" in json.dumps(description)
+    assert out.read_text() != (tmp_path / "l.csv").read_text()
+
+
+def test_stability_distributed_roots_check_and_frequencies():
+    """The rightmost roots of Delta_d, complete by the argument principle on the box (whose
+    height bounds the search, as the text says), and the off-bottom frequencies of base."""
+    out = json.loads(run("stability", "--string-model", "distributed", "--json").stdout)
+    assert out["string_model"] == "distributed" and out["complete"] and not out["stable"]
+    assert out["roots_found"] == out["roots_counted"] > 0
+    re, _im = out["roots"][0]
+    assert re == max(r[0] for r in out["roots"]) > 0
+    assert "argument principle" in out["completeness"] and "not searched" in out["completeness"]
+    assert out["torsional_frequencies_hz"] == pytest.approx([0.555, 1.830, 3.271], abs=2e-3)
+    assert out["axial_frequencies_hz"] == pytest.approx([1.858, 4.078], abs=2e-3)
+    text = run("stability", "--string-model", "distributed").stdout
+    assert "argument principle" in text and "not searched" in text
+    assert "torsional 0.555, 1.830, 3.271 Hz; axial 1.858, 4.078 Hz" in text
+    lumped = json.loads(run("stability", "--json").stdout)
+    assert "string_model" not in lumped and lumped["complete"]
