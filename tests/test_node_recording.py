@@ -71,6 +71,10 @@ def test_recorded_session_is_read_by_rosbags_and_mcap_ros2(ros, tmp_path):
         cmds = [store.deserialize_cdr(raw, c.msgtype).twist.angular.z
                 for c, _, raw in r.messages() if c.topic == "/rec/drill_sim/cmd/top_drive"]
         assert cmds == [7.0] * 6
+        statuses = [store.deserialize_cdr(raw, c.msgtype).status[0]
+                    for c, _, raw in r.messages() if c.topic == "/diagnostics"]
+        assert statuses and statuses[0].name == "drill_sim: rig"    # /diagnostics recorded
+        assert "regime" in {kv.key for kv in statuses[-1].values}
     decoded = sum(1 for _ in read_ros2_messages(str(bag / "session_0.mcap")))
     assert decoded == sum(counts.values())
     meta = reader.info(bag).metadata

@@ -2,8 +2,8 @@
 rosbag2 MCAP bag (``drill_sim.bag.writer``), with the session's context (parameters,
 dimensionless groups, scales, preset, node) as MCAP metadata, which ``drill_sim bag resim``
 needs to re-run the session. Which topics, of which types, come from the topics table.
-Outputs are recorded as the very bytes the node published; commands and events are encoded
-here (``drill_sim.wire.cdr``).
+Outputs are recorded as the very bytes the node published, commands as the very bytes it
+received; events are encoded here (``drill_sim.wire.cdr``).
 
 Recording problems (full disk, unwritable path) stop the recording with a clear error and leave
 the simulation running; the bag written so far stays readable.
@@ -40,6 +40,7 @@ class SessionRecorder:
         self.names = {t.name: resolve(t.name) for t in rig_topics.recorded(with_clock)}
         self.outputs = [self.names[t.name] for t in rig_topics.published(with_clock)]
         self.events_topic = self.names[rig_topics.EVENTS_TOPIC.name]
+        self.diagnostics_topic = self.names[rig_topics.DIAGNOSTICS_TOPIC.name]
         meta = {"session": {"package": "drill_sim", "version": __version__,
                             "start_time_ns": str(time.time_ns()),
                             "command_line": json.dumps(sys.argv)}}
@@ -47,15 +48,16 @@ class SessionRecorder:
                                      self.events_topic).items():
             meta.setdefault(name, {}).update(values)
         # Every topic is recorded as offered with the session's qos_reliability (so /clock
-        # too, though its publisher is always reliable): bags keep the form they always had.
+        # too, though its publisher is always reliable): bags keep the form they always had;
+        # /diagnostics, recorded since, with the QoS it is offered with.
         offered = rig_topics.RIG_QOS.with_reliability(str(p["qos_reliability"]))
-        self._encode_command = cdr.StampedVectorsByFrame()
         try:
             self.writer = BagWriter(Path(str(p["record"])), metadata=meta,
                                     split_duration_s=p["record_split_duration_s"],
                                     split_size_bytes=p["record_split_size_bytes"])
             for t in rig_topics.recorded(with_clock):
-                self.writer.add_topic(self.names[t.name], t.type_name, [offered.as_dict()])
+                qos = t.qos if t is rig_topics.DIAGNOSTICS_TOPIC else offered
+                self.writer.add_topic(self.names[t.name], t.type_name, [qos.as_dict()])
         except (OSError, BagError) as exc:
             self.error = f"not recording: {exc}"
             logger.error(f"{self.error}; the simulation runs on")
@@ -73,17 +75,23 @@ class SessionRecorder:
             except (OSError, BagError) as exc:
                 self._stop(exc)
 
-    def record_command(self, t: RigTopic, frame_id: str, sec: int, nanosec: int,
-                       six: tuple[float, ...]) -> None:
-        """A command as received (TwistStamped or WrenchStamped, its six float64), logged now
-        and published at its stamp (now if stamped before 1970: that cannot be a time)."""
+    def record_command(self, t: RigTopic, data: bytes, sec: int, nanosec: int) -> None:
+        """A command's bytes as received, logged now and published at its stamp ``sec``,
+        ``nanosec`` (now if stamped before 1970: that cannot be a time)."""
         if self.error is None:
             now, sent = time.time_ns(), sec * 1_000_000_000 + nanosec
             try:
-                self.writer.write(self.names[t.name],
-                                  self._encode_command(frame_id, sec, nanosec, six), now,
-                                  sent if sent >= 0 else now)
-            except (OSError, BagError, WireError) as exc:
+                self.writer.write(self.names[t.name], data, now, sent if sent >= 0 else now)
+            except (OSError, BagError) as exc:
+                self._stop(exc)
+
+    def record_diagnostics(self, data: bytes) -> None:
+        """A /diagnostics message as published (CDR bytes), received and published now."""
+        if self.error is None:
+            now = time.time_ns()
+            try:
+                self.writer.write(self.diagnostics_topic, data, now, now)
+            except (OSError, BagError) as exc:
                 self._stop(exc)
 
     def record_event(self, kind: str, sim_time_s: float,
