@@ -36,6 +36,8 @@ from .recorder import SessionRecorder
 from .stopping import init_stoppable
 from .topics import message_class, rclpy_qos, service_class
 
+SWITCH_INTERVAL_S = 5e-4
+
 
 class RigNode(Node):
     """The drilling rig node. Parameters, topics and services: msg_docs/node.md."""
@@ -238,6 +240,9 @@ def main(args: list[str] | None = None) -> int:
     # SIGINT/SIGTERM only raise a flag, so the node always stops between two ticks: no tick
     # is cut in half (published but not recorded, or recorded in part).
     stop = init_stoppable(args)
+    # The recorder's threads (chunk assembly, finishing a split file) run Python too; a tick
+    # waiting for the GIL gets it within this switch interval, not Python's default 5 ms.
+    sys.setswitchinterval(SWITCH_INTERVAL_S)
     node = executor = None
     try:
         node = RigNode()
