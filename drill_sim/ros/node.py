@@ -72,7 +72,7 @@ class RigNode(Node):
             node=self.get_fully_qualified_name(), resolve=self.resolve_topic_name,
             stamp_epoch_ns=0 if self.with_clock else self._epoch_ns,
             logger=self.get_logger()) if self.p["record"] else None
-        self.pacer = Pacer(self.p["rate_hz"], self.p["real_time_factor"], self._max_speed(self.p),
+        self.pacer = Pacer(self.p["rate_hz"], self.p["real_time_factor"], bool(self.p["max_speed"]),
                            self.p["diagnostics_period_s"], self.rig.time_s)
         self._cmd_wall = time.monotonic()
         self.timer = None
@@ -89,10 +89,6 @@ class RigNode(Node):
         return self.create_publisher(message_class(t.type_name), t.name,
                                      rclpy_qos(t.qos_for(self.p["qos_reliability"])))
 
-    @staticmethod
-    def _max_speed(p: dict[str, object]) -> bool:
-        """Ticks back to back: max_speed applies only with publish_clock (msg_docs/node.md)."""
-        return bool(p["max_speed"] and p["publish_clock"])
 
     # ---- time --------------------------------------------------------------------------
     @property
@@ -187,6 +183,14 @@ class RigNode(Node):
         return response
 
     # ---- parameters at run time --------------------------------------------------------
+    def set_parameters_atomically(self, parameter_list) -> SetParametersResult:
+        """What the parameter services call: a parameter that cannot change at run time, or
+        a value out of its range, is refused with the reason (rclpy's would not say why)."""
+        refusal = parameters.refusal(getattr(self, "_specs", {}), parameter_list)
+        if refusal is not None:
+            return SetParametersResult(successful=False, reason=refusal)
+        return super().set_parameters_atomically(parameter_list)
+
     def _on_set_parameters(self, params) -> SetParametersResult:
         new, refusal = parameters.changed(self._specs, self.p, params)
         if refusal is not None:
@@ -199,8 +203,11 @@ class RigNode(Node):
         if changed and self.recorder is not None:
             self.recorder.record_event("parameters", self.sim_time_s,
                                        {k: str(new[k]) for k in sorted(changed)})
-        self.pacer.configure(new["rate_hz"], new["real_time_factor"], self._max_speed(new),
+        self.pacer.configure(new["rate_hz"], new["real_time_factor"], bool(new["max_speed"]),
                              self.rig.time_s)
+        if changed & set(parameters.SPLITS) and self.recorder is not None:
+            self.recorder.set_split(new["record_split_duration_s"],
+                                    new["record_split_size_bytes"])
         if "rate_hz" in changed and self.timer is not None:
             self.timer.cancel()
             self.destroy_timer(self.timer)

@@ -64,6 +64,12 @@ class SessionRecorder:
             return
         logger.info(f"recording to {p['record']}")
 
+    def set_split(self, duration_s: float, size_bytes: int) -> None:
+        """New split limits (0: never), from the next message on."""
+        if self.error is None:
+            self.writer.split_duration_ns = int(duration_s * 1e9)
+            self.writer.split_size_bytes = int(size_bytes)
+
     def record_outputs(self, data: list[bytes]) -> None:
         """One tick's outputs as published, in the table's publishing order, received and
         published now."""
