@@ -40,9 +40,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "(default 100 when given)")
     parser.add_argument("--queue-depth", type=int, default=1000,
                         help="publisher history depth per topic [messages] (default 1000)")
-    parser.add_argument("--wait-for", type=int, default=1, metavar="N",
+    parser.add_argument("--wait-for", type=_count_or_all, default=1, metavar="N|all",
                         help="wait for at least N matched subscriptions before playing "
-                             "(default 1; 0 = do not wait)")
+                             "(default 1; 0 = do not wait); all: for one on every topic")
     parser.add_argument("--wait-timeout", type=float, default=30.0, metavar="S",
                         help="play anyway after S seconds of waiting (default 30)")
 
@@ -54,7 +54,8 @@ def _check(args: argparse.Namespace) -> None:
                args.start_offset >= 0 and math.isfinite(args.start_offset), ">= 0"),
               ("--clock", args.clock, args.clock >= 0 and math.isfinite(args.clock), "> 0 Hz"),
               ("--queue-depth", args.queue_depth, args.queue_depth >= 1, ">= 1"),
-              ("--wait-for", args.wait_for, args.wait_for >= 0, ">= 0"),
+              ("--wait-for", args.wait_for, args.wait_for == "all" or args.wait_for >= 0,
+               ">= 0 (or all)"),
               ("--wait-timeout", args.wait_timeout, args.wait_timeout >= 0, ">= 0 s")]
     for name, value, ok, expected in checks:
         if not ok:
@@ -100,7 +101,8 @@ def _play(args: argparse.Namespace, argv: list[str], bag: Path, source: Bag, fou
     stop = init_stoppable(argv)
     player = Player(source, topics, found.start_ns, PlayOptions(
         rate=args.rate, start_offset_s=args.start_offset, clock_hz=args.clock,
-        queue_depth=args.queue_depth, wait_for=args.wait_for, wait_timeout_s=args.wait_timeout))
+        queue_depth=args.queue_depth, wait_for=1 if args.wait_for == "all" else args.wait_for,
+        wait_for_every_topic=args.wait_for == "all", wait_timeout_s=args.wait_timeout))
     try:
         if not player.publishers_by_topic:
             print("drill_sim_replay: none of the bag's message types is installed here",
@@ -126,6 +128,15 @@ def _play(args: argparse.Namespace, argv: list[str], bag: Path, source: Bag, fou
         player.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def _count_or_all(text: str) -> int | str:
+    if text == "all":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number or all") from None
 
 
 def main(argv: list[str] | None = None) -> int:
