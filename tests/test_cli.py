@@ -149,3 +149,12 @@ def test_main_job_passes_on_a_bad_node_parameter_in_one_line(param, fragment):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and fragment in lines[0], proc.stderr
     assert "Traceback" not in proc.stderr + proc.stdout
+
+
+def test_stability_shows_the_rig_key_figures():
+    text = run("stability", "--preset", "base").stdout
+    assert "rig: W_s 338 kN, t* 0.210 s, torsional 0.756 Hz (period 1.32 s), axial 5.61 Hz" \
+        in text
+    figures = json.loads(run("stability", "--preset", "deep", "--json").stdout)["si"]["figures"]
+    assert figures["t_star_s"] == pytest.approx(0.364, rel=0.01)
+    assert figures["beta"] == pytest.approx(0.36)

@@ -80,6 +80,11 @@ def test_recorded_session_is_read_by_rosbags_and_mcap_ros2(ros, tmp_path):
     meta = reader.info(bag).metadata
     assert meta["session"]["preset"] == "base" and "command_line" in meta["session"]
     assert float(meta["groups"]["psi"]) == pytest.approx(13.73, rel=0.01)
+    figures = {k: float(v) for k, v in meta["figures"].items()}    # the rig's key figures
+    assert figures["t_star_s"] == pytest.approx(0.210, rel=0.01)
+    assert figures["torsional_frequency_hz"] == pytest.approx(0.756, rel=0.01)
+    assert figures["axial_frequency_hz"] == pytest.approx(5.61, rel=0.01)
+    assert figures["submerged_weight_n"] == pytest.approx(338.4e3, rel=0.001)
     assert meta["parameters"]["torsional_stiffness_nm_per_rad"].startswith("938")
 
 

@@ -84,6 +84,7 @@ class RigNode(Node):
             f"dt = {self.rig.dt_s:.3g} s, {self.p['rate_hz']:g} Hz, real-time factor "
             f"{'max' if self.pacer.max_speed else self.p['real_time_factor']}, "
             f"{'publishing /clock' if self.with_clock else 'wall-clock stamps'}")
+        self.get_logger().info(f"rig figures: {session.figures_line(self.rig.params)}")
 
     def _publisher(self, t: RigTopic) -> Publisher:
         return self.create_publisher(message_class(t.type_name), t.name,
@@ -200,6 +201,8 @@ class RigNode(Node):
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         self.p = new
+        if changed & set(session.RIG_FIELDS):
+            self.get_logger().info(f"rig figures now: {session.figures_line(self.rig.params)}")
         if changed and self.recorder is not None:
             self.recorder.record_event("parameters", self.sim_time_s,
                                        {k: str(new[k]) for k in sorted(changed)})

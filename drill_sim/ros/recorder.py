@@ -1,7 +1,8 @@
 """In-node recording: every topic the node publishes and every command it receives, into a
 rosbag2 MCAP bag (``drill_sim.bag.writer``), with the session's context (parameters,
-dimensionless groups, scales, preset, node) as MCAP metadata, which ``drill_sim bag resim``
-needs to re-run the session. Which topics, of which types, come from the topics table.
+dimensionless groups, scales, the rig's key figures, preset, node) as MCAP metadata, which
+``drill_sim bag resim`` needs to re-run the session. Which topics, of which types, come from
+the topics table.
 Outputs are recorded as the very bytes the node published, commands as the very bytes it
 received; events are encoded here (``drill_sim.wire.cdr``).
 
@@ -20,6 +21,7 @@ from pathlib import Path
 from .. import __version__
 from ..bag.writer import BagError, BagWriter
 from ..core.rig import Rig
+from ..core.session import key_figures
 from ..wire import WireError, cdr, rig_topics
 from ..wire.rig_topics import RigTopic
 
@@ -139,6 +141,7 @@ def _context(p: dict[str, object], rig: Rig, preset: str, node: str, stamp_epoch
         "scales": {"time_s": repr(sc.time_s), "length_m": repr(sc.length_m),
                    "force_n": repr(sc.force_n),
                    "stiffness_nm_per_rad": repr(sc.stiffness_nm_per_rad)},
+        "figures": {k: repr(v) for k, v in key_figures(rig.params).items()},
         "session": {"preset": preset, "node": node, "stamp_epoch_ns": str(stamp_epoch_ns),
                     "events_topic": events_topic},
     }
