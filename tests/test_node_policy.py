@@ -3,6 +3,7 @@ and the command rule the node and ``bag resim`` share."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import pytest
@@ -144,8 +145,9 @@ def test_real_time_pacing_follows_the_clock_and_drops_a_backlog():
 
 
 def test_max_speed_pacing_advances_one_tick_per_call():
-    pacer = Pacer(100.0, 1.0, True, window_s=1.0, rig_time_s=5.0, clock=FakeClock())
+    pacer = Pacer(100.0, 3.0, True, window_s=1.0, rig_time_s=5.0, clock=FakeClock())
     assert pacer.target(5.0) == pytest.approx(5.01)
+    assert pacer.tick_s == pytest.approx(0.01)        # what ~/step advances: one tick
 
 
 def test_tick_statistics_over_a_window():
@@ -202,3 +204,24 @@ def test_command_rule_takes_its_field_and_limit():
     assert "[0, 30] rad/s" in expected
     assert session.apply_command(rig, p, "hook_load", "", (0.0, 0.0, math.nan) + (0.0,) * 3)
     assert (rig.commanded_speed_rad_s, rig.commanded_hook_load_n) == (7.0, 2e5)  # held
+
+
+def test_the_steady_start_turns_into_stick_slip_as_node_md_says():
+    """The node's steady start (session.start: no perturbation) on base at 60 rpm and 100 kN:
+    round-off grows into a first stick after ~12 s, then a 1.57 s stick-slip cycle."""
+    preset = load_preset("base")
+    p = {"initial_top_drive_speed_rad_s": 60 * RPM, "initial_weight_on_bit_n": 100e3,
+         "initial_state": "steady"}
+    rig = Rig(preset.rig)
+    session.start(rig, p)
+    onsets, was_stuck, k = [], False, 0
+    while len(onsets) < 4:
+        k += 1
+        rig.advance_to(k * 1e-3)
+        stuck = rig.sample().stuck
+        if stuck and not was_stuck:
+            onsets.append(k * 1e-3)
+        was_stuck = stuck
+    assert 11.0 < onsets[0] < 13.5
+    periods = [b - a for a, b in itertools.pairwise(onsets[1:])]
+    assert all(p == pytest.approx(1.57, abs=0.03) for p in periods)

@@ -91,8 +91,9 @@ class Pacer:
 
     @property
     def tick_s(self) -> float:
-        """Simulated time of one tick in real-time mode [s] (what ``~/step`` advances)."""
-        return 1.0 / self.rate_hz * self.real_time_factor
+        """Simulated time of one nominal tick [s] (what ``~/step`` advances): 1/``rate_hz``
+        times the real-time factor in real time, 1/``rate_hz`` at max speed."""
+        return 1.0 / self.rate_hz * (1.0 if self.max_speed else self.real_time_factor)
 
     def tick_started(self) -> None:
         """Every timer tick, paused or not: the period since the last one."""

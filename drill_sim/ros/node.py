@@ -262,12 +262,15 @@ def main(args: list[str] | None = None) -> int:
         # EventsExecutor.spin() does not dispatch timers in this rclpy; spin_once() does, at
         # 1 kHz with p99 period ~1.08 ms and a fifth of the CPU of SingleThreadedExecutor.
         if node.pacer.max_speed:
-            # ticks back to back; commands, services and diagnostics once per wall millisecond
+            # ticks back to back, each taking the commands that came; services, parameters
+            # and diagnostics once per wall millisecond; paused, a tick per wall millisecond
             next_spin = 0.0
             while not stop:
                 node.tick()
                 now = time.monotonic()
-                if now >= next_spin:
+                if node.paused:
+                    executor.spin_once(timeout_sec=1e-3)
+                elif now >= next_spin:
                     executor.spin_once(timeout_sec=0.0)
                     next_spin = now + 1e-3
         else:
