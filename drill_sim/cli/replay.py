@@ -51,9 +51,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--queue-depth", type=integer, default=1000,
                         help="publisher history depth per topic [messages], 1 to "
                              f"{MAX_QUEUE_DEPTH} (default 1000)")
-    parser.add_argument("--wait-for", type=integer, default=1, metavar="N",
+    parser.add_argument("--wait-for", type=_count_or_all, default=1, metavar="N|all",
                         help="wait for at least N matched subscriptions before playing "
-                             f"(default 1; 0 = do not wait), up to {MAX_WAIT_FOR}")
+                             f"(default 1; 0 = do not wait; up to {MAX_WAIT_FOR}); all: for one "
+                             "on every topic")
     parser.add_argument("--wait-timeout", type=number, default=30.0, metavar="S",
                         help="play anyway after S seconds of waiting (default 30), up to "
                              f"{MAX_WAIT_S:g}")
@@ -72,8 +73,9 @@ def _check(args: argparse.Namespace) -> None:
              what="a /clock rate", note="(0: no /clock)")
     whole("--queue-depth", args.queue_depth, 1, MAX_QUEUE_DEPTH, unit="messages",
           what="a history depth:")
-    whole("--wait-for", args.wait_for, 0, MAX_WAIT_FOR, unit="subscriptions",
-          what="a count:")
+    if args.wait_for != "all":
+        whole("--wait-for", args.wait_for, 0, MAX_WAIT_FOR, unit="subscriptions",
+              what="a count:")
     in_range("--wait-timeout", args.wait_timeout, 0.0, MAX_WAIT_S, unit="s",
              what="a waiting time")
 
@@ -123,7 +125,8 @@ def _play(args: argparse.Namespace, argv: list[str], bag: Path, source: Bag, fou
     stop = init_stoppable(argv)
     player = Player(source, topics, found.start_ns, PlayOptions(
         rate=args.rate, start_offset_s=args.start_offset, clock_hz=args.clock,
-        queue_depth=args.queue_depth, wait_for=args.wait_for, wait_timeout_s=args.wait_timeout))
+        queue_depth=args.queue_depth, wait_for=1 if args.wait_for == "all" else args.wait_for,
+        wait_for_every_topic=args.wait_for == "all", wait_timeout_s=args.wait_timeout))
     try:
         if not player.publishers_by_topic:
             print("drill_sim_replay: none of the bag's message types is installed here",
@@ -151,6 +154,11 @@ def _play(args: argparse.Namespace, argv: list[str], bag: Path, source: Bag, fou
         player.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def _count_or_all(text: str) -> int | str:
+    """argparse ``type`` of --wait-for: a count, or ``all`` (one subscription on every topic)."""
+    return "all" if text.strip() == "all" else integer(text)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -4,6 +4,7 @@ status line, and at the end a summary and a plot."""
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import shutil
 import signal
@@ -15,10 +16,16 @@ from pathlib import Path
 
 import numpy as np
 
+from ..bag.errors import BagError
+from ..bag.series import RigSeries, rig_series
 from ..core import RPM, load_preset
+from ..core.diagnostics import drilling_regime
 from ..core.scenario import load_scenario
 from .checks import in_range, new_bag, number, plot_file
 from .errors import UsageError
+from .plot import plot_rig_series
+
+STATUS_WINDOW_S = 1.0          # the stretch of samples the status line names the regime of
 
 MAX_DURATION_S = 1e6     # --duration [s] (documented in msg_docs/cli.md, "Limits")
 
@@ -52,7 +59,6 @@ def run(args: argparse.Namespace) -> int:
     from rclpy.executors import SingleThreadedExecutor
 
     from ..ros.monitor import Monitor
-    from .plot import plot_rig_series
 
     if args.no_record and args.record is not None:
         raise UsageError(f"--no-record with --record {args.record}: they contradict each other; "
@@ -76,32 +82,22 @@ def run(args: argparse.Namespace) -> int:
                 *args.ros_args]
     drive_cmd = [executable("drill_sim_drive"), args.scenario]
     env = dict(os.environ)
-    procs = [subprocess.Popen(node_cmd, env=env), subprocess.Popen(drive_cmd, env=env)]
     rclpy.init()
     monitor = Monitor()
     executor = SingleThreadedExecutor()
     executor.add_node(monitor)
+    procs = [subprocess.Popen(node_cmd, env=env)]
     tty = sys.stdout.isatty()
     node_exit = None
     try:
-        start = time.monotonic()
-        last_print = 0.0
-        while time.monotonic() - start < duration + 2.0:
-            executor.spin_once(timeout_sec=0.02)
+        # the driver starts once the rig publishes: a node that refuses its parameters has
+        # printed its one line and run ends there, with the node's status 2
+        while monitor.count == 0 and node_exit is None:
+            executor.spin_once(timeout_sec=0.05)
             node_exit = procs[0].poll()
-            if node_exit is not None:
-                break
-            now = time.monotonic()
-            if now - last_print > (0.2 if tty else 5.0):
-                last_print = now
-                s = monitor.latest()
-                if s is not None:
-                    line = (f"t {s['elapsed_s']:6.1f} s | bit "
-                            f"{s['bit_speed_rad_s'] / RPM:6.1f} rpm (top drive "
-                            f"{s['top_drive_speed_rad_s'] / RPM:5.1f}) | WOB "
-                            f"{s['wob_n'] / 1e3:6.1f} kN | TOB {s['tob_nm'] / 1e3:5.2f} kN m | "
-                            f"{'STICK-SLIP' if s['stick_slip'] else 'smooth    '}")
-                    print(("\r" + line) if tty else line, end="" if tty else "\n", flush=True)
+        if node_exit is None:
+            procs.append(subprocess.Popen(drive_cmd, env=env))
+            node_exit = _live(executor, monitor, procs[0], duration, tty)
     except KeyboardInterrupt:
         pass
     finally:
@@ -115,31 +111,98 @@ def run(args: argparse.Namespace) -> int:
                 p.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 p.kill()
-        series, flags = monitor.series(), monitor.flags()
+        received = monitor.series()
         executor.shutdown()
         monitor.destroy_node()
         rclpy.try_shutdown()
+    if node_exit == 2 and received.time_s.size == 0:
+        return 2                   # a bad start-up parameter: the node said which, in one line
     if node_exit is not None:
         print(f"drill_sim run: drill_sim_node stopped early with status {node_exit} "
               "(its message is above)", file=sys.stderr)
         return 1
+    series, whence = _session(bag, received)
     if series.time_s.size < 2:
         print("drill_sim run: no samples received from the rig", file=sys.stderr)
         return 1
-    elapsed = series.time_s[-1] - series.time_s[0]
-    whole = series.metrics()
-    last = series.window(elapsed - min(20.0, elapsed / 2), None).metrics()
-    print(f"drill_sim run: scenario '{scenario.name}' on preset '{preset.name}', "
-          f"{elapsed:.1f} s simulated, {whole['samples']} samples")
-    print(f"  hole drilled             {series.hole_depth_m[-1]:8.3f} m")
-    print(f"  last {last['duration_s']:4.1f} s: mean bit speed "
-          f"{last['mean_bit_speed_rad_s'] / RPM:6.1f} rpm, WOB {last['mean_wob_n'] / 1e3:6.1f} kN, "
-          f"TOB {last['mean_tob_nm'] / 1e3:5.2f} kN m")
-    print(f"  stick fraction (whole run)  {whole['stick_fraction']:.3f}; "
-          f"stick-slip flagged {np.mean(flags):.3f} of the time")
+    _summary(series, whence, scenario.name, preset.name)
     plot_rig_series(args.plot, series, title=f"drill_sim run: {scenario.name} on {preset.name}")
     print(f"plot written to {args.plot}")
     if bag is not None and bag.is_dir():
         print(f"session recorded to {bag}: replay it with drill_sim_replay, re-run it with "
               f"drill_sim bag resim, or see drill_sim bag info|metrics|plot")
     return 0
+
+
+def _live(executor, monitor, node: subprocess.Popen, duration: float, tty: bool) -> int | None:
+    """Spin the monitor for ``duration`` (+2 s) with the status line; the node's exit status
+    if it stopped meanwhile."""
+    start = time.monotonic()
+    last_print = 0.0
+    while time.monotonic() - start < duration + 2.0:
+        executor.spin_once(timeout_sec=0.02)
+        if node.poll() is not None:
+            return node.returncode
+        now = time.monotonic()
+        if now - last_print > (0.2 if tty else 5.0):
+            last_print = now
+            s = monitor.latest()
+            if s is not None:
+                name = regime(monitor.recent(STATUS_WINDOW_S), monitor.flag)
+                line = (f"t {s['elapsed_s']:6.1f} s | bit "
+                        f"{s['bit_speed_rad_s'] / RPM:6.1f} rpm (top drive "
+                        f"{s['top_drive_speed_rad_s'] / RPM:5.1f}) | WOB "
+                        f"{s['wob_n'] / 1e3:6.1f} kN | TOB {s['tob_nm'] / 1e3:5.2f} kN m | "
+                        f"{name:<21}")
+                print(("\r" + line) if tty else line, end="" if tty else "\n", flush=True)
+    return None
+
+
+def regime(series: RigSeries, stick_flag: bool = False) -> str:
+    """The drilling regime of a stretch of samples (``core.diagnostics.drilling_regime``,
+    as /diagnostics names it): SSI of the bit speed, stuck samples or the node's stick-slip
+    flag, off bottom where the WOB is zero."""
+    w = series.bit_speed_rad_s
+    if w.size == 0:
+        return "no data"
+    mean = float(np.mean(w))
+    off = series.wob_n == 0.0
+    return drilling_regime(
+        ssi=float((w.max() - w.min()) / (2 * mean)) if mean > 0 else math.inf,
+        stuck=bool(np.any(series.stuck)) or stick_flag,
+        off_bottom_fraction=float(np.mean(off)), off_bottom_now=bool(off[-1]),
+        top_drive_speed_rad_s=float(series.top_drive_speed_rad_s[-1]))
+
+
+def _session(bag: Path | None, received: RigSeries) -> tuple[RigSeries, str]:
+    """The session's samples: from its bag (every sample the node published), else as this
+    monitor received them (it misses those before it matched the node)."""
+    if bag is not None and bag.is_dir():
+        try:
+            return rig_series(bag), "every sample the node published, read from its bag"
+        except BagError as exc:
+            print(f"drill_sim run: reading {bag}: {exc}; summing up what was received",
+                  file=sys.stderr)
+    return received, ("as received here: the node's first samples, before this monitor "
+                      "matched it, are not counted")
+
+
+def _summary(series: RigSeries, whence: str, scenario: str, preset: str) -> None:
+    elapsed = series.time_s[-1] - series.time_s[0]
+    whole = series.metrics()
+    last = series.window(elapsed - min(20.0, elapsed / 2), None).metrics()
+    print(f"drill_sim run: scenario '{scenario}' on preset '{preset}', {elapsed:.3f} s "
+          f"simulated, {whole['samples']} samples ({whence})")
+    print(f"  hole drilled             {series.hole_depth_m[-1]:8.3f} m")
+    print(f"  last {last['duration_s']:4.1f} s: mean bit speed "
+          f"{last['mean_bit_speed_rad_s'] / RPM:6.1f} rpm, WOB {last['mean_wob_n'] / 1e3:6.1f} kN, "
+          f"TOB {last['mean_tob_nm'] / 1e3:5.2f} kN m")
+    shares: dict[str, int] = {}
+    for k in range(max(1, int(elapsed // STATUS_WINDOW_S))):
+        name = regime(series.window(k * STATUS_WINDOW_S, (k + 1) * STATUS_WINDOW_S))
+        shares[name] = shares.get(name, 0) + 1
+    total = sum(shares.values())
+    print(f"  stick fraction (whole run)  {whole['stick_fraction']:.3f}; regimes over "
+          f"{STATUS_WINDOW_S:g} s windows: " + ", ".join(
+              f"{name} {100 * n / total:.0f} %" for name, n in
+              sorted(shares.items(), key=lambda kv: -kv[1])))

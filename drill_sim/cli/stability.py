@@ -9,6 +9,7 @@ from ..core import RPM, Groups, NoSteadyDrilling, ParameterError, stability, ste
 from ..core.distributed import STRING_MODELS
 from .case import OMEGA0_MAX, RPM_MAX, Case, add_model_arguments, resolve_case
 from .checks import in_range, integer, json_line, number, typed
+from ..core.session import figures_line, key_figures
 from .errors import UsageError
 from .stability_string import run_distributed
 
@@ -70,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
         out["si"] = {"depth_of_cut_per_rev_m": steady.delta_n0 * case.groups.n * sc.length_m,
                      "rop_m_s": steady.v0 * sc.velocity_m_s,
                      "torque_on_bit_nm": steady.t0 * sc.stiffness_nm_per_rad,
-                     "wob_n": case.w0 * sc.force_n, "t_star_s": sc.time_s}
+                     "wob_n": case.w0 * sc.force_n, "t_star_s": sc.time_s,
+                     "figures": key_figures(case.preset.rig)}
     if args.json:
         print(json_line(out))
         return 0
@@ -80,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
         si = out["si"]
         print(f"  in SI: d = {si['depth_of_cut_per_rev_m'] * 1e3:.3f} mm/rev, ROP = "
               f"{si['rop_m_s'] * 3600:.2f} m/h, TOB = {si['torque_on_bit_nm'] / 1e3:.3f} kN m")
+        print(f"  rig: {figures_line(case.preset.rig)}")
     print(f"{'stable' if res.stable else 'UNSTABLE'}: {len(roots)} roots with Re s >= {re_min:g} "
           f"besides s = 0 ({'all' if res.complete else 'NOT all'} of the "
           f"{res.count_argument_principle - 1} the argument principle counts); rightmost:")

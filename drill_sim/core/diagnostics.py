@@ -1,6 +1,9 @@
 """The rig node's /diagnostics status as a pure function of the rig's state and the tick
 statistics, so the policy (what is OK, what warns, what is an error) is tested without ROS;
 the node only turns the result into a ``diagnostic_msgs/DiagnosticArray`` (msg_docs/node.md).
+
+Also the drilling regime in an engineer's words (``drilling_regime``), the one naming used by
+/diagnostics and by the status line of ``drill_sim run``.
 """
 
 from __future__ import annotations
@@ -13,54 +16,99 @@ from .rig import RigSample
 OK, WARN, ERROR = 0, 1, 2      # the levels of diagnostic_msgs/DiagnosticStatus
 SLOW_TICKS = 0.9               # warn below this fraction of rate_hz (once ticks overran)
 
+# Drilling regimes and their thresholds (msg_docs/node.md, "Drilling regimes")
+STEADY, TORSIONAL, STICK_SLIP = "steady", "torsional oscillation", "stick-slip"
+BOUNCING, OFF_BOTTOM, NOT_ROTATING = "bouncing", "off bottom", "not rotating"
+REGIMES = (STEADY, TORSIONAL, STICK_SLIP, BOUNCING, OFF_BOTTOM, NOT_ROTATING)
+TORSIONAL_SSI = 0.1            # bit speed swinging more than +-10 % around its mean
+OFF_BOTTOM_FRACTION = 0.5      # off bottom now and for at least half of the window
+
+
+def drilling_regime(*, ssi: float, stuck: bool, off_bottom_fraction: float,
+                    off_bottom_now: bool, top_drive_speed_rad_s: float) -> str:
+    """The bit's regime over a window, first match wins:
+
+    - off bottom: off the rock now and for at least OFF_BOTTOM_FRACTION of the window;
+    - bouncing: off the rock for part of the window (a single lift-off or landing also
+      shows as bouncing for the one window that holds it);
+    - not rotating: on the rock, stuck, and the top drive commanded to stand still;
+    - stick-slip: the bit stopped (stuck) within the window;
+    - torsional oscillation: SSI = (max - min) / (2 mean) of the bit speed >= TORSIONAL_SSI;
+    - steady: otherwise (SSI below TORSIONAL_SSI, or no data: NaN).
+    """
+    if off_bottom_now and off_bottom_fraction >= OFF_BOTTOM_FRACTION:
+        return OFF_BOTTOM
+    if off_bottom_fraction > 0.0:
+        return BOUNCING
+    if stuck:
+        return NOT_ROTATING if top_drive_speed_rad_s == 0.0 else STICK_SLIP
+    return TORSIONAL if ssi >= TORSIONAL_SSI else STEADY
+
+
+@dataclass(frozen=True)
+class CommandCounts:
+    """The node's command counters: taken since start, taken but replaced by a newer one of
+    the same topic within the same tick, lost before they were taken (since start and in
+    this window)."""
+
+    received: int = 0
+    superseded: int = 0
+    lost: int = 0
+    lost_in_window: int = 0
+
 
 @dataclass(frozen=True)
 class Status:
-    level: int                 # OK, WARN or ERROR
-    message: str
+    level: int                 # OK, WARN or ERROR: the worst of the active conditions
+    message: str               # every active condition, worst first; else the regime
     values: dict[str, str]     # key -> value, units in the keys
-
-
-def regime(sample: RigSample, bounce_fraction: float) -> str:
-    """The drilling regime in words: off bottom, bouncing (the bit left the rock within the
-    window), stick-slip (the stick-slip flag is up) or drilling."""
-    if sample.off_bottom:
-        return "off bottom"
-    if bounce_fraction > 0:
-        return "bouncing"
-    return "stick-slip" if sample.stick_slip else "drilling"
 
 
 def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *,
                paused: bool, record_error: str | None, command_age_s: float,
                command_timeout_s: float, rate_hz: float, max_speed: bool,
-               sim_time_s: float) -> Status:
-    """The status over one diagnostics window. ERROR when recording failed; otherwise WARN
-    when no command came for ``command_timeout_s`` [s] (not while paused) or, once ticks
-    overran in real-time mode, when fewer than SLOW_TICKS of ``rate_hz`` [Hz] came; the
-    message is the regime, or why it is not OK. ``metrics``: the rig's window metrics
-    (``ssi``, ``stick_fraction``, ``bounce_fraction``); ``sim_time_s``: session time [s]."""
-    name = regime(sample, metrics["bounce_fraction"])
-    level, message = OK, name
+               sim_time_s: float, commands: CommandCounts = CommandCounts()) -> Status:
+    """The status over one diagnostics window. Conditions: ERROR when recording failed;
+    WARN, while running, when ticks overran in real-time mode and fewer than SLOW_TICKS of
+    ``rate_hz`` [Hz] came, when commands were lost in the window, and when no command came
+    for ``command_timeout_s`` [s]; ``paused`` (OK) while paused. ``metrics``: the rig's
+    window metrics (``ssi``, ``stick_fraction``, ``bounce_fraction``); ``sim_time_s``:
+    session time [s]."""
+    name = drilling_regime(ssi=metrics["ssi"],
+                           stuck=metrics["stick_fraction"] > 0.0 or sample.stick_slip,
+                           off_bottom_fraction=metrics["bounce_fraction"],
+                           off_bottom_now=sample.off_bottom,
+                           top_drive_speed_rad_s=sample.top_drive_speed_rad_s)
+    found: list[tuple[int, str]] = []
     if record_error:
-        level, message = ERROR, record_error
-    elif paused:
-        message = "paused"
-    elif command_age_s > command_timeout_s:
-        level = WARN
-        message = (f"no command for {command_age_s:.1f} s (timeout {command_timeout_s:g} s); "
-                   "holding the last valid command")
-    elif ticks.overruns and not max_speed and ticks.ticks < SLOW_TICKS * rate_hz * ticks.wall_s:
-        level, message = WARN, f"tick rate {ticks.rate_hz:.0f} Hz below {rate_hz:g} Hz"
-    return Status(level, message, {
+        found.append((ERROR, record_error))
+    if paused:
+        found.append((OK, "paused"))
+    else:
+        if ticks.overruns and not max_speed and ticks.ticks < SLOW_TICKS * rate_hz * ticks.wall_s:
+            found.append((WARN, f"tick rate {ticks.rate_hz:.0f} Hz below {rate_hz:g} Hz"))
+        if commands.lost_in_window:
+            found.append((WARN, f"{commands.lost_in_window} commands lost in the last "
+                                f"{ticks.wall_s:.1f} s (they came faster than the ticks)"))
+        if command_age_s > command_timeout_s:
+            found.append((WARN, f"no command for {command_age_s:.1f} s (timeout "
+                                f"{command_timeout_s:g} s); holding the last valid command"))
+    found.sort(key=lambda c: -c[0])                 # worst first, stable otherwise
+    return Status(max((c[0] for c in found), default=OK),
+                  "; ".join(c[1] for c in found) if found else name, {
         "tick_rate_hz": f"{ticks.rate_hz:.1f}",
         "tick_period_p99_ms": f"{ticks.period_p99_s * 1e3:.3f}",
+        "tick_period_max_ms": f"{ticks.period_max_s * 1e3:.3f}",
         "overruns": str(ticks.overruns),
         "real_time_factor": f"{ticks.real_time_factor:.3f}",
         "regime": name,
         "ssi": f"{metrics['ssi']:.3f}",
         "stick_fraction": f"{metrics['stick_fraction']:.3f}",
+        "off_bottom_fraction": f"{metrics['bounce_fraction']:.3f}",
         "command_age_s": f"{command_age_s:.3f}",
+        "commands_received": str(commands.received),
+        "commands_superseded": str(commands.superseded),
+        "commands_lost": str(commands.lost),
         "sim_time_s": f"{sim_time_s:.3f}",
         "paused": str(paused).lower(),
     })

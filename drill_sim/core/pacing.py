@@ -30,6 +30,7 @@ class TickStats:
     sim_s: float             # simulated time advanced [s]
     period_p99_s: float      # 99th percentile of the timer's periods [s]; nan without any
     overruns: int            # since start
+    period_max_s: float = math.nan   # the longest period [s]; nan without any
 
     @property
     def rate_hz(self) -> float:
@@ -52,8 +53,10 @@ class Pacer:
                  clock: Callable[[], float] = time.monotonic) -> None:
         self.rate_hz, self.real_time_factor, self.max_speed = rate_hz, real_time_factor, max_speed
         self._clock = clock
-        self._periods = np.zeros(int(4 * rate_hz * window_s) + 8)
+        self._window_s = window_s
+        self._periods = np.zeros(self._buffer_size(rate_hz))
         self._n_periods = 0
+        self._longest = math.nan
         self.overruns = self.ticks = 0
         self._last_tick: float | None = None
         self._target = rig_time_s
@@ -65,6 +68,10 @@ class Pacer:
         """New settings at run time; a new real-time factor counts from now."""
         changed_factor = real_time_factor != self.real_time_factor
         self.rate_hz, self.real_time_factor, self.max_speed = rate_hz, real_time_factor, max_speed
+        if self._buffer_size(rate_hz) > self._periods.size:
+            grown = np.zeros(self._buffer_size(rate_hz))
+            grown[:self._n_periods] = self._periods[:self._n_periods]
+            self._periods = grown
         if changed_factor:
             self.anchor(rig_time_s)
 
@@ -78,10 +85,15 @@ class Pacer:
         self.anchor(rig_time_s)
         self._window = (self._window[0], self._window[1], rig_time_s)
 
+    def _buffer_size(self, rate_hz: float) -> int:
+        """Room for the periods of a window, four times over (diagnostics may come late)."""
+        return int(4 * rate_hz * self._window_s) + 8
+
     @property
     def tick_s(self) -> float:
-        """Simulated time of one tick in real-time mode [s] (what ``~/step`` advances)."""
-        return 1.0 / self.rate_hz * self.real_time_factor
+        """Simulated time of one nominal tick [s] (what ``~/step`` advances): 1/``rate_hz``
+        times the real-time factor in real time, 1/``rate_hz`` at max speed."""
+        return 1.0 / self.rate_hz * (1.0 if self.max_speed else self.real_time_factor)
 
     def tick_started(self) -> None:
         """Every timer tick, paused or not: the period since the last one."""
@@ -91,6 +103,8 @@ class Pacer:
             if self._n_periods < self._periods.size:
                 self._periods[self._n_periods] = period
                 self._n_periods += 1
+            if not period <= self._longest:          # also replaces NaN
+                self._longest = period
             if period > OVERRUN_PERIODS / self.rate_hz and not self.max_speed:
                 self.overruns += 1
         self._last_tick = now
@@ -117,7 +131,8 @@ class Pacer:
         wall0, ticks0, sim0 = self._window
         periods = self._periods[:self._n_periods]
         p99 = float(np.percentile(periods, 99)) if periods.size else math.nan
+        longest, self._longest = self._longest, math.nan
         self._n_periods = 0
         self._window = (now, self.ticks, rig_time_s)
         return TickStats(self.ticks - ticks0, max(now - wall0, 1e-9), rig_time_s - sim0, p99,
-                         self.overruns)
+                         self.overruns, longest)

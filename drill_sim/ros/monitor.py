@@ -49,6 +49,13 @@ class Monitor(Node):
     def flags(self) -> np.ndarray:
         return self._rows[:self.count, 13] > 0.0
 
+    def recent(self, seconds: float) -> RigSeries:
+        """The samples of the last ``seconds`` of simulated time received."""
+        r = self._rows[:self.count]
+        first = int(np.searchsorted(r[:, 0], r[-1, 0] - seconds)) if self.count else 0
+        r = r[first:]
+        return RigSeries.from_joints(self.topic, r[:, 0], r[:, 1:5], r[:, 5:9], r[:, 9:13])
+
     def latest(self) -> dict[str, float] | None:
         """The last sample by quantity name, plus ``elapsed_s`` and ``stick_slip``."""
         if self.count == 0:

@@ -4,16 +4,15 @@ A thin adapter: each tick advances the core ``Rig`` to the simulated time the ``
 and publishes its sample, encoded once (``wire.rig_messages``). Topics and services come from
 the table in ``wire.rig_topics``; the rules live in ``core``: commands and parameter changes in
 ``session``, pacing in ``pacing``, the diagnostics policy in ``diagnostics``; recording in
-``recorder``. Commands are validated in their callbacks and held (zero-order hold) until the
-next tick; a refused command never reaches the model.
+``recorder``. Commands are taken by the tick itself (``commands``: a bounded number per tick,
+so a flood of them cannot stop the clock), validated and held (zero-order hold) from that tick
+on; a refused command never reaches the model.
 """
 
 from __future__ import annotations
 
 import sys
 import time
-from functools import partial
-from operator import attrgetter
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -21,20 +20,23 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.publisher import Publisher
+from rclpy.serialization import serialize_message
 from std_srvs.srv import SetBool, Trigger
 
 from ..core import NoSteadyDrilling, ParameterError, session
-from ..core.diagnostics import rig_status
+from ..core.diagnostics import CommandCounts, rig_status
 from ..core.pacing import Pacer
 from ..core.rig import RigSample
 from ..wire import rig_topics
-from ..wire.cdr import VECTOR_FIELDS
 from ..wire.rig_messages import RigEncoders
 from ..wire.rig_topics import RigTopic
 from . import parameters
+from .commands import CommandInbox
 from .recorder import SessionRecorder
 from .stopping import init_stoppable
 from .topics import message_class, rclpy_qos, service_class
+
+SWITCH_INTERVAL_S = 5e-4
 
 
 class RigNode(Node):
@@ -55,11 +57,9 @@ class RigNode(Node):
         self._enc = RigEncoders(self.with_clock)
         self._outputs = [self._publisher(t) for t in self._enc.topics]
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
-        for t in rig_topics.COMMANDS:
-            self.create_subscription(
-                message_class(t.type_name), t.name,
-                partial(self._on_command, t, attrgetter(*VECTOR_FIELDS[t.type_name])),
-                rclpy_qos(t.qos_for(self.p["qos_reliability"])))
+        self.commands = CommandInbox(self, self.p["qos_reliability"])
+        self.superseded = 0                      # commands replaced within their tick
+        self._undecodable = self._lost_before = 0
         handlers = {"~/reset": self._on_reset, "~/pause": self._on_pause, "~/step": self._on_step}
         for t in rig_topics.SERVICES:
             self.create_service(service_class(t.type_name), t.name, handlers[t.name])
@@ -72,7 +72,7 @@ class RigNode(Node):
             node=self.get_fully_qualified_name(), resolve=self.resolve_topic_name,
             stamp_epoch_ns=0 if self.with_clock else self._epoch_ns,
             logger=self.get_logger()) if self.p["record"] else None
-        self.pacer = Pacer(self.p["rate_hz"], self.p["real_time_factor"], self._max_speed(self.p),
+        self.pacer = Pacer(self.p["rate_hz"], self.p["real_time_factor"], bool(self.p["max_speed"]),
                            self.p["diagnostics_period_s"], self.rig.time_s)
         self._cmd_wall = time.monotonic()
         self.timer = None
@@ -84,15 +84,12 @@ class RigNode(Node):
             f"dt = {self.rig.dt_s:.3g} s, {self.p['rate_hz']:g} Hz, real-time factor "
             f"{'max' if self.pacer.max_speed else self.p['real_time_factor']}, "
             f"{'publishing /clock' if self.with_clock else 'wall-clock stamps'}")
+        self.get_logger().info(f"rig figures: {session.figures_line(self.rig.params)}")
 
     def _publisher(self, t: RigTopic) -> Publisher:
         return self.create_publisher(message_class(t.type_name), t.name,
                                      rclpy_qos(t.qos_for(self.p["qos_reliability"])))
 
-    @staticmethod
-    def _max_speed(p: dict[str, object]) -> bool:
-        """Ticks back to back: max_speed applies only with publish_clock (msg_docs/node.md)."""
-        return bool(p["max_speed"] and p["publish_clock"])
 
     # ---- time --------------------------------------------------------------------------
     @property
@@ -107,6 +104,7 @@ class RigNode(Node):
     # ---- the tick ----------------------------------------------------------------------
     def tick(self) -> None:
         self.pacer.tick_started()
+        self.take_commands()
         if self.paused:
             return
         self.rig.advance_to(self.pacer.target(self.rig.time_s))
@@ -122,20 +120,33 @@ class RigNode(Node):
             self.recorder.record_outputs(data)
 
     # ---- commands ----------------------------------------------------------------------
-    def _on_command(self, t: RigTopic, six_of: attrgetter, msg) -> None:
-        """Recorded as received; used only if the session's rule accepts it (frame expected,
-        value finite and in range), else the last valid command is held."""
-        six, header = six_of(msg), msg.header
-        if self.recorder is not None:
-            self.recorder.record_command(t, header.frame_id, header.stamp.sec,
-                                         header.stamp.nanosec, six)
-        refusal = session.apply_command(self.rig, self.p, t.command, header.frame_id, six)
-        if refusal is None:
+    def take_commands(self) -> None:
+        """The commands that arrived since the last tick, in arrival order: each recorded as
+        received and used only if the session's rule accepts it (frame expected, value finite
+        and in range), else the last valid command is held."""
+        batch = self.commands.take()
+        if self.commands.undecodable != self._undecodable:
+            self._undecodable = self.commands.undecodable
+            self.get_logger().warning(f"{self._undecodable} command messages could not be "
+                                      "decoded (not little-endian CDR?) and were ignored",
+                                      throttle_duration_sec=1.0)
+        if not batch:
+            return
+        accepted: dict[str, int] = {}
+        for c in batch:
+            if self.recorder is not None:
+                self.recorder.record_command(c.topic, c.data, c.sec, c.nanosec)
+            refusal = session.apply_command(self.rig, self.p, c.topic.command, c.frame_id, c.six)
+            if refusal is None:
+                accepted[c.topic.name] = accepted.get(c.topic.name, 0) + 1
+            else:
+                what, value, expected = refusal
+                self.get_logger().warning(f"refused {what} = {value!r}: expected {expected}; "
+                                          "holding the last valid command",
+                                          throttle_duration_sec=1.0)
+        if accepted:
             self._cmd_wall = time.monotonic()
-        else:
-            what, value, expected = refusal
-            self.get_logger().warning(f"refused {what} = {value!r}: expected {expected}; holding "
-                                      "the last valid command", throttle_duration_sec=1.0)
+            self.superseded += sum(accepted.values()) - len(accepted)
 
     # ---- services ----------------------------------------------------------------------
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
@@ -173,6 +184,14 @@ class RigNode(Node):
         return response
 
     # ---- parameters at run time --------------------------------------------------------
+    def set_parameters_atomically(self, parameter_list) -> SetParametersResult:
+        """What the parameter services call: a parameter that cannot change at run time, or
+        a value out of its range, is refused with the reason (rclpy's would not say why)."""
+        refusal = parameters.refusal(getattr(self, "_specs", {}), parameter_list)
+        if refusal is not None:
+            return SetParametersResult(successful=False, reason=refusal)
+        return super().set_parameters_atomically(parameter_list)
+
     def _on_set_parameters(self, params) -> SetParametersResult:
         new, refusal = parameters.changed(self._specs, self.p, params)
         if refusal is not None:
@@ -182,11 +201,16 @@ class RigNode(Node):
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
         self.p = new
+        if changed & set(session.RIG_FIELDS):
+            self.get_logger().info(f"rig figures now: {session.figures_line(self.rig.params)}")
         if changed and self.recorder is not None:
             self.recorder.record_event("parameters", self.sim_time_s,
                                        {k: str(new[k]) for k in sorted(changed)})
-        self.pacer.configure(new["rate_hz"], new["real_time_factor"], self._max_speed(new),
+        self.pacer.configure(new["rate_hz"], new["real_time_factor"], bool(new["max_speed"]),
                              self.rig.time_s)
+        if changed & set(parameters.SPLITS) and self.recorder is not None:
+            self.recorder.set_split(new["record_split_duration_s"],
+                                    new["record_split_size_bytes"])
         if "rate_hz" in changed and self.timer is not None:
             self.timer.cancel()
             self.destroy_timer(self.timer)
@@ -205,19 +229,30 @@ class RigNode(Node):
             record_error=self.recorder.error if self.recorder is not None else None,
             command_age_s=now - self._cmd_wall, command_timeout_s=self.p["command_timeout_s"],
             rate_hz=self.p["rate_hz"], max_speed=self.pacer.max_speed,
-            sim_time_s=self.sim_time_s)
+            sim_time_s=self.sim_time_s, commands=CommandCounts(
+                self.commands.received, self.superseded, self.commands.lost,
+                self.commands.lost - self._lost_before))
+        self._lost_before = self.commands.lost
         array = DiagnosticArray(status=[DiagnosticStatus(
             level=bytes([status.level]), name=f"{self.get_name()}: rig", message=status.message,
             hardware_id=self.preset.name,
             values=[KeyValue(key=k, value=v) for k, v in status.values.items()])])
         array.header.stamp = self.get_clock().now().to_msg()
-        self._diagnostics.publish(array)
+        if self.recorder is None:
+            self._diagnostics.publish(array)
+        else:                                    # serialized once: published and recorded
+            data = serialize_message(array)
+            self._diagnostics.publish(data)
+            self.recorder.record_diagnostics(data)
 
 
 def main(args: list[str] | None = None) -> int:
     # SIGINT/SIGTERM only raise a flag, so the node always stops between two ticks: no tick
     # is cut in half (published but not recorded, or recorded in part).
     stop = init_stoppable(args)
+    # The recorder's threads (chunk assembly, finishing a split file) run Python too; a tick
+    # waiting for the GIL gets it within this switch interval, not Python's default 5 ms.
+    sys.setswitchinterval(SWITCH_INTERVAL_S)
     node = executor = None
     try:
         node = RigNode()
@@ -227,12 +262,15 @@ def main(args: list[str] | None = None) -> int:
         # EventsExecutor.spin() does not dispatch timers in this rclpy; spin_once() does, at
         # 1 kHz with p99 period ~1.08 ms and a fifth of the CPU of SingleThreadedExecutor.
         if node.pacer.max_speed:
-            # ticks back to back; commands, services and diagnostics once per wall millisecond
+            # ticks back to back, each taking the commands that came; services, parameters
+            # and diagnostics once per wall millisecond; paused, a tick per wall millisecond
             next_spin = 0.0
             while not stop:
                 node.tick()
                 now = time.monotonic()
-                if now >= next_spin:
+                if node.paused:
+                    executor.spin_once(timeout_sec=1e-3)
+                elif now >= next_spin:
                     executor.spin_once(timeout_sec=0.0)
                     next_spin = now + 1e-3
         else:
@@ -248,6 +286,7 @@ def main(args: list[str] | None = None) -> int:
                 node.recorder.close()
             if executor is not None:
                 executor.shutdown()
+            node.commands.destroy()
             node.destroy_node()
         rclpy.try_shutdown()
     return 0

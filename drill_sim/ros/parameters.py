@@ -1,136 +1,115 @@
-"""The node's ROS parameters: one table with type, default, range, unit and whether it may change
-at run time. Model parameters default to the chosen preset's values."""
+"""The node's ROS parameters (the table: ``parameter_table``), declared so that a bad value at
+start-up is one clear ``ParameterError`` (the node prints it and exits with status 2) rather
+than rclpy's exception, and an integer where a real number is expected (``-p rate_hz:=1000``,
+``ros2 param set ... rate_hz 500``) simply works.
+
+Each parameter is declared with a dynamically typed descriptor, so rclpy takes any override;
+the value is then checked and converted here, and the parameter gets its real descriptor
+(type, range, read-only) with the converted value. At run time a pre-set callback converts
+integers to reals (and whole reals to integers) before rclpy checks the type, and the node's
+callback refuses, with the reason, what the table refuses."""
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+from functools import partial
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from ..core import ParameterError, Preset, load_preset
-from ..core.simulator import DEFAULT_DT
+from .parameter_table import (
+    BOOL,
+    FLOAT,
+    INT,
+    PRESET_READ_ONLY,
+    SPLITS,
+    Spec,
+    cross_refusal,
+    specs,
+)
+
+_TYPES = {BOOL: ParameterType.PARAMETER_BOOL, INT: ParameterType.PARAMETER_INTEGER,
+          FLOAT: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING}
 
 
-@dataclass(frozen=True)
-class Spec:
-    name: str
-    default: object
-    description: str
-    low: float | None = None
-    high: float | None = None
-    read_only: bool = False
-    choices: tuple[str, ...] = ()
-
-    def refusal(self, value: object) -> str | None:
-        """Why ``value`` is refused beyond what the descriptor's range enforces, or None."""
-        if self.choices and value not in self.choices:
-            return f"{self.name} = {value!r}: expected one of {', '.join(self.choices)}"
-        if isinstance(value, float) and not math.isfinite(value):
-            return f"{self.name} = {value!r} is not finite"
-        return None
-
-    def descriptor(self) -> ParameterDescriptor:
-        d = ParameterDescriptor(name=self.name, description=self.description,
-                                read_only=self.read_only)
-        if isinstance(self.default, bool):
-            d.type = ParameterType.PARAMETER_BOOL
-        elif isinstance(self.default, int):
-            d.type = ParameterType.PARAMETER_INTEGER
-            if self.low is not None:
-                d.integer_range = [IntegerRange(from_value=int(self.low), to_value=int(self.high),
-                                                step=1)]
-        elif isinstance(self.default, float):
-            d.type = ParameterType.PARAMETER_DOUBLE
-            if self.low is not None:
-                d.floating_point_range = [FloatingPointRange(from_value=self.low,
-                                                             to_value=self.high, step=0.0)]
-        else:
-            d.type = ParameterType.PARAMETER_STRING
-            if self.choices:
-                d.additional_constraints = "one of: " + ", ".join(self.choices)
-        return d
+def descriptor(spec: Spec) -> ParameterDescriptor:
+    """The descriptor tools see: type, range, read-only, and the description with its unit."""
+    unit = f" [{spec.unit}]" if spec.unit else ""
+    d = ParameterDescriptor(name=spec.name, description=spec.description + unit,
+                            read_only=bool(spec.read_only), type=_TYPES[spec.kind])
+    if spec.kind is INT and spec.low is not None:
+        d.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
+                                        step=1)]
+    elif spec.kind is FLOAT and spec.low is not None:
+        d.floating_point_range = [FloatingPointRange(from_value=spec.low, to_value=spec.high,
+                                                     step=0.0)]
+    notes = [n for n in (f"0 or at least {spec.off_or_at_least:g}" if spec.off_or_at_least
+                         else "", spec.why, spec.read_only) if n]
+    d.additional_constraints = "; ".join(notes) if not spec.choices else \
+        "one of: " + ", ".join(spec.choices)
+    return d
 
 
-MODEL_UNITS = {
-    "bit_radius_m": ("bit radius a [m]", 1e-3, 1.0),
-    "blade_count": ("number of blades n [-]", 1, 64),
-    "intrinsic_specific_energy_pa": ("intrinsic specific energy epsilon [Pa]", 1e5, 1e10),
-    "cutting_inclination": ("cutting-force inclination zeta [-]", 0.01, 10.0),
-    "contact_stress_pa": ("wear-flat contact stress sigma [Pa]", 0.0, 1e10),
-    "wear_flat_length_m": ("total wear-flat length l over all blades [m]", 0.0, 1.0),
-    "friction_coefficient": ("bit-rock friction coefficient mu [-]", 0.0, 10.0),
-    "wear_flat_orientation": ("wear-flat orientation number gamma [-]", 0.0, 10.0),
-    "bha_mass_kg": ("BHA mass M [kg]", 1.0, 1e7),
-    "bha_inertia_kg_m2": ("BHA polar inertia I [kg m^2]", 1e-3, 1e6),
-    "torsional_stiffness_nm_per_rad": ("string torsional stiffness C [N m/rad]", 1.0, 1e8),
-    "submerged_weight_n": ("submerged weight of the string W_s [N]", 1.0, 1e9),
-}
-
-
-def specs(preset: Preset) -> list[Spec]:
-    """Every parameter but ``preset`` (declared first, since the others default from it)."""
-    rig = preset.rig
-    t_star = rig.scales.time_s
-    out = [Spec(name, getattr(rig, name), text, low, high)
-           for name, (text, low, high) in MODEL_UNITS.items()]
-    out += [
-        Spec("rate_hz", 1000.0, "tick rate of the stepping timer [Hz]", 1.0, 5000.0),
-        Spec("real_time_factor", 1.0, "simulated seconds per wall second [-]", 0.01, 1000.0),
-        Spec("max_speed", False, "with publish_clock: step as fast as possible"),
-        Spec("publish_clock", False, "publish /clock with the simulation time (sim-time mode)"),
-        Spec("dt_s", DEFAULT_DT * t_star, "fixed integration step [s]", 1e-7, 0.01,
-             read_only=True),
-        Spec("qos_reliability", "reliable", "reliability of every topic", read_only=True,
-             choices=("reliable", "best_effort")),
-        Spec("command_timeout_s", 1.0, "command age above which /diagnostics warns [s]",
-             0.001, 3600.0),
-        Spec("stick_slip_window_s", 4.0 * math.pi * t_star,
-             "the stick-slip flag stays up this long after a stick [s]", 0.001, 3600.0),
-        Spec("initial_state", "steady", "steady (drilling at the initial commands) or rest "
-             "(at rest initial_gap_m above bottom, hanging, not rotating)",
-             choices=("steady", "rest")),
-        Spec("initial_top_drive_speed_rad_s", preset.top_drive_speed_rad_s,
-             "top-drive speed command at start and after reset [rad/s]", 0.0, 100.0),
-        Spec("initial_weight_on_bit_n", 1e3 * preset.weight_on_bit_kn,
-             "available weight W0 = W_s - H0 at start and after reset [N]", 0.0, 1e9),
-        Spec("initial_gap_m", 0.05, "with initial_state rest: bit height above bottom [m]",
-             0.0, 100.0),
-        Spec("max_top_drive_speed_rad_s", 30.0, "commands above this are refused [rad/s]",
-             0.0, 1000.0),
-        Spec("max_hook_load_n", 2.0 * rig.submerged_weight_n,
-             "hook-load commands above this are refused [N]", 0.0, 1e10),
-        Spec("hoist_speed_limit_m_s", 0.5, "the string rises no faster than this [m/s]",
-             1e-4, 100.0),
-        Spec("record", "", "bag directory to record the session into (rosbag2, MCAP); empty: "
-             "no recording", read_only=True),
-        Spec("record_split_duration_s", 0.0, "start a new bag file after this long [s]; 0: never",
-             0.0, 1e7, read_only=True),
-        Spec("record_split_size_bytes", 0, "start a new bag file past this size [bytes]; 0: never",
-             0, 2**62, read_only=True),
-        Spec("diagnostics_period_s", 1.0, "period of /diagnostics [s]", 0.05, 60.0,
-             read_only=True),
-    ]
-    return out
-
+def _declare_any(node: Node, name: str, default: object, text: str) -> object:
+    """Declare ``name`` taking whatever value the command line or params file gives."""
+    return node.declare_parameter(name, default, ParameterDescriptor(
+        description=text, dynamic_typing=True)).value
 
 
 def declare(node: Node) -> tuple[Preset, dict[str, Spec], dict[str, object]]:
     """Declare ``preset``, then every parameter of that preset's table, on ``node``: the preset,
     the specs by name and the values. Raises ParameterError naming a value refused."""
-    node.declare_parameter("preset", "base", ParameterDescriptor(
-        description="preset name (base, shallow, deep) or preset YAML file", read_only=True))
-    preset = load_preset(node.get_parameter("preset").value)
+    name = _declare_any(node, "preset", "base", "preset name or YAML file")
+    if not isinstance(name, str):
+        raise ParameterError(f"parameter preset = {name!r}: expected a preset name (base, "
+                             "shallow, deep) or a preset YAML file")
+    preset = load_preset(name)
+    node.set_descriptor("preset", ParameterDescriptor(
+        description="preset name (base, shallow, deep) or preset YAML file", read_only=True,
+        type=ParameterType.PARAMETER_STRING, additional_constraints=PRESET_READ_ONLY))
     by_name = {s.name: s for s in specs(preset)}
+    values: dict[str, object] = {}
     for spec in by_name.values():
-        node.declare_parameter(spec.name, spec.default, spec.descriptor())
-    values = {name: node.get_parameter(name).value for name in by_name}
-    for name, spec in by_name.items():
-        if (refusal := spec.refusal(values[name])) is not None:
+        value, refusal = spec.check(_declare_any(node, spec.name, spec.default,
+                                                 spec.description))
+        if refusal is not None:
             raise ParameterError(f"parameter {refusal}")
+        values[spec.name] = value
+    if (refusal := cross_refusal(values)) is not None:
+        raise ParameterError(f"parameters: {refusal}")
+    for spec in by_name.values():
+        node.set_descriptor(spec.name, descriptor(spec),
+                            Parameter(spec.name, value=values[spec.name]).get_parameter_value())
+    node.add_pre_set_parameters_callback(partial(_converted, by_name))
     return preset, by_name, values
+
+
+def _converted(by_name: dict[str, Spec], params: list[Parameter]) -> list[Parameter]:
+    """Integers for real parameters as reals, whole reals for integer ones as integers."""
+    out = []
+    for param in params:
+        spec = by_name.get(param.name)
+        if spec is not None and param.type_ in (Parameter.Type.INTEGER, Parameter.Type.DOUBLE):
+            value, _ = spec.check(param.value)
+            if type(value) is not type(param.value):
+                param = Parameter(param.name, value=value)
+        out.append(param)
+    return out
+
+
+def refusal(by_name: dict[str, Spec], params: list[Parameter]) -> str | None:
+    """Why a run-time change is refused, checked before rclpy's own checks (which would not
+    say why): a parameter that cannot change, or a value the table refuses. None if neither."""
+    for param in params:
+        if param.name == "preset":
+            return f"preset cannot change at run time: {PRESET_READ_ONLY}"
+        spec = by_name.get(param.name)
+        if spec is not None and spec.read_only:
+            return f"{spec.name} cannot change at run time: {spec.read_only}"
+        if spec is not None and (why := spec.check(param.value)[1]) is not None:
+            return why
+    return None
 
 
 def changed(by_name: dict[str, Spec], values: dict[str, object], params: list[Parameter]
@@ -138,9 +117,14 @@ def changed(by_name: dict[str, Spec], values: dict[str, object], params: list[Pa
     """The values after a run-time change to ``params``, or the first refusal (a reason)."""
     new = dict(values)
     for param in params:
-        if param.name in new:
-            refusal = by_name[param.name].refusal(param.value)
+        if param.name in by_name:
+            value, refusal = by_name[param.name].check(param.value)
             if refusal is not None:
                 return values, refusal
-            new[param.name] = param.value
+            new[param.name] = value
+    if (refusal := cross_refusal(new)) is not None:
+        return values, refusal
+    if not values["record"] and any(new[k] != values[k] for k in SPLITS):
+        return values, "record_split_* apply to recording, and this node does not record " \
+                       "(record is empty)"
     return new, None

@@ -1,9 +1,10 @@
 """In-node recording: every topic the node publishes and every command it receives, into a
 rosbag2 MCAP bag (``drill_sim.bag.writer``), with the session's context (parameters,
-dimensionless groups, scales, preset, node) as MCAP metadata, which ``drill_sim bag resim``
-needs to re-run the session. Which topics, of which types, come from the topics table.
-Outputs are recorded as the very bytes the node published; commands and events are encoded
-here (``drill_sim.wire.cdr``).
+dimensionless groups, scales, the rig's key figures, preset, node) as MCAP metadata, which
+``drill_sim bag resim`` needs to re-run the session. Which topics, of which types, come from
+the topics table.
+Outputs are recorded as the very bytes the node published, commands as the very bytes it
+received; events are encoded here (``drill_sim.wire.cdr``).
 
 Recording problems (full disk, unwritable path) stop the recording with a clear error and leave
 the simulation running; the bag written so far stays readable.
@@ -20,6 +21,7 @@ from pathlib import Path
 from .. import __version__
 from ..bag.writer import BagError, BagWriter
 from ..core.rig import Rig
+from ..core.session import key_figures
 from ..wire import WireError, cdr, rig_topics
 from ..wire.rig_topics import RigTopic
 
@@ -40,6 +42,7 @@ class SessionRecorder:
         self.names = {t.name: resolve(t.name) for t in rig_topics.recorded(with_clock)}
         self.outputs = [self.names[t.name] for t in rig_topics.published(with_clock)]
         self.events_topic = self.names[rig_topics.EVENTS_TOPIC.name]
+        self.diagnostics_topic = self.names[rig_topics.DIAGNOSTICS_TOPIC.name]
         meta = {"session": {"package": "drill_sim", "version": __version__,
                             "start_time_ns": str(time.time_ns()),
                             "command_line": json.dumps(sys.argv)}}
@@ -47,20 +50,27 @@ class SessionRecorder:
                                      self.events_topic).items():
             meta.setdefault(name, {}).update(values)
         # Every topic is recorded as offered with the session's qos_reliability (so /clock
-        # too, though its publisher is always reliable): bags keep the form they always had.
+        # too, though its publisher is always reliable): bags keep the form they always had;
+        # /diagnostics, recorded since, with the QoS it is offered with.
         offered = rig_topics.RIG_QOS.with_reliability(str(p["qos_reliability"]))
-        self._encode_command = cdr.StampedVectorsByFrame()
         try:
             self.writer = BagWriter(Path(str(p["record"])), metadata=meta,
                                     split_duration_s=p["record_split_duration_s"],
                                     split_size_bytes=p["record_split_size_bytes"])
             for t in rig_topics.recorded(with_clock):
-                self.writer.add_topic(self.names[t.name], t.type_name, [offered.as_dict()])
+                qos = t.qos if t is rig_topics.DIAGNOSTICS_TOPIC else offered
+                self.writer.add_topic(self.names[t.name], t.type_name, [qos.as_dict()])
         except (OSError, BagError) as exc:
             self.error = f"not recording: {exc}"
             logger.error(f"{self.error}; the simulation runs on")
             return
         logger.info(f"recording to {p['record']}")
+
+    def set_split(self, duration_s: float, size_bytes: int) -> None:
+        """New split limits (0: never), from the next message on."""
+        if self.error is None:
+            self.writer.split_duration_ns = int(duration_s * 1e9)
+            self.writer.split_size_bytes = int(size_bytes)
 
     def record_outputs(self, data: list[bytes]) -> None:
         """One tick's outputs as published, in the table's publishing order, received and
@@ -73,17 +83,23 @@ class SessionRecorder:
             except (OSError, BagError) as exc:
                 self._stop(exc)
 
-    def record_command(self, t: RigTopic, frame_id: str, sec: int, nanosec: int,
-                       six: tuple[float, ...]) -> None:
-        """A command as received (TwistStamped or WrenchStamped, its six float64), logged now
-        and published at its stamp (now if stamped before 1970: that cannot be a time)."""
+    def record_command(self, t: RigTopic, data: bytes, sec: int, nanosec: int) -> None:
+        """A command's bytes as received, logged now and published at its stamp ``sec``,
+        ``nanosec`` (now if stamped before 1970: that cannot be a time)."""
         if self.error is None:
             now, sent = time.time_ns(), sec * 1_000_000_000 + nanosec
             try:
-                self.writer.write(self.names[t.name],
-                                  self._encode_command(frame_id, sec, nanosec, six), now,
-                                  sent if sent >= 0 else now)
-            except (OSError, BagError, WireError) as exc:
+                self.writer.write(self.names[t.name], data, now, sent if sent >= 0 else now)
+            except (OSError, BagError) as exc:
+                self._stop(exc)
+
+    def record_diagnostics(self, data: bytes) -> None:
+        """A /diagnostics message as published (CDR bytes), received and published now."""
+        if self.error is None:
+            now = time.time_ns()
+            try:
+                self.writer.write(self.diagnostics_topic, data, now, now)
+            except (OSError, BagError) as exc:
                 self._stop(exc)
 
     def record_event(self, kind: str, sim_time_s: float,
@@ -125,6 +141,7 @@ def _context(p: dict[str, object], rig: Rig, preset: str, node: str, stamp_epoch
         "scales": {"time_s": repr(sc.time_s), "length_m": repr(sc.length_m),
                    "force_n": repr(sc.force_n),
                    "stiffness_nm_per_rad": repr(sc.stiffness_nm_per_rad)},
+        "figures": {k: repr(v) for k, v in key_figures(rig.params).items()},
         "session": {"preset": preset, "node": node, "stamp_epoch_ns": str(stamp_epoch_ns),
                     "events_topic": events_topic},
     }

@@ -2,9 +2,10 @@
 
 Like ``ros2 bag play``: any rosbag2 MCAP bag (or bare ``.mcap``) whose message types are
 installed here; each topic is published with the QoS its recorded publishers offered, the
-CDR bytes as they are. Playback starts once subscribers have matched, so none of the first
-messages is lost. A clock rate publishes ``/clock`` from the recorded times for nodes running
-with ``use_sim_time``.
+CDR bytes as they are. Playback starts once subscribers have matched (with
+``wait_for_every_topic``, one on every topic played), so none of the first messages is lost.
+A clock rate publishes ``/clock`` from the recorded times for nodes running with
+``use_sim_time``.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ class PlayOptions:
     clock_hz: float = 0.0         # /clock publishing rate; 0: no /clock
     queue_depth: int = 1000       # publisher history depth per topic [messages]
     wait_for: int = 1             # matched subscriptions to wait for before playing
+    wait_for_every_topic: bool = False   # and at least one on every topic played
     wait_timeout_s: float = 30.0  # play anyway after this long waiting
 
 
@@ -66,24 +68,31 @@ class Player(Node):
     # ---- before: subscribers -----------------------------------------------------------
     def wait_for_subscribers(self, stop: list[int], settle_s: float = 0.25) -> str | None:
         """Until every subscription the graph knows on our topics has matched, at least
-        ``wait_for`` have, and no new one has appeared for ``settle_s`` (a recorder
-        subscribes to several topics at once, and they are discovered one by one); None
-        then, or what was missing when ``wait_timeout_s`` passed."""
+        ``wait_for`` have (and, with ``wait_for_every_topic``, at least one on every topic),
+        and no new one has appeared for ``settle_s`` (a recorder subscribes to several topics
+        at once, and they are discovered one by one); None then, or what was missing when
+        ``wait_timeout_s`` passed."""
         end = time.monotonic() + self.options.wait_timeout_s
         last, changed = None, time.monotonic()
         while not stop:
-            matched = sum(p.get_subscription_count() for p in self.publishers_by_topic.values())
+            per_topic = {t: p.get_subscription_count()
+                         for t, p in self.publishers_by_topic.items()}
+            matched = sum(per_topic.values())
             known = sum(self.count_subscribers(t) for t in self.publishers_by_topic)
+            alone = sorted(t for t, n in per_topic.items() if n == 0) \
+                if self.options.wait_for_every_topic else []
             if (matched, known) != last:
                 last, changed = (matched, known), time.monotonic()
-            if matched >= self.options.wait_for and matched >= known \
+            if matched >= self.options.wait_for and matched >= known and not alone \
                     and time.monotonic() - changed >= settle_s:
                 return None
             if time.monotonic() >= end:
                 return (f"{matched} subscriptions matched of "
                         f"{max(known, self.options.wait_for)} waited for after "
-                        f"{self.options.wait_timeout_s:g} s (a subscription "
-                        "asking for more than the recorded QoS offers never matches)")
+                        f"{self.options.wait_timeout_s:g} s" + (
+                            f", none on {len(alone)} topics ({', '.join(alone)})"
+                            if alone else "") + " (a subscription asking for more than the "
+                        "recorded QoS offers never matches)")
             time.sleep(0.01)
         return None
 

@@ -142,4 +142,4 @@ def published(with_clock: bool) -> tuple[RigTopic, ...]:
 
 def recorded(with_clock: bool) -> tuple[RigTopic, ...]:
     """What the in-node recorder writes, in the order its channels are declared."""
-    return published(with_clock) + COMMANDS + (EVENTS_TOPIC,)
+    return published(with_clock) + COMMANDS + (EVENTS_TOPIC, DIAGNOSTICS_TOPIC)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import subprocess
 
 import pytest
@@ -110,6 +111,11 @@ def test_main_job_runs_node_and_driver_and_writes_summary_and_plot(tmp_path):
     # recorded by default; a real-time session with the driver's commands re-runs exactly
     (bag,) = tmp_path.glob("drill_sim_session_*")
     assert f"session recorded to {bag.name}" in proc.stdout
+    # the summary counts what the node published: the samples of its bag
+    from drill_sim.bag import reader
+    samples = int(re.search(r"(\d+) samples", proc.stdout).group(1))
+    assert samples == reader.info(bag).topics["/drill_sim/joint_states"].count
+    assert re.search(r"\| (steady|torsional oscillation|stick-slip) ", proc.stdout)
     resim = run("bag", "resim", str(bag), "--json", check=False)
     assert resim.returncode == 0, resim.stdout + resim.stderr
     r = json.loads(resim.stdout)
@@ -128,12 +134,27 @@ def test_main_job_bad_arguments(tmp_path):
     assert list((tmp_path / "taken").iterdir()) == []          # nothing written into it
 
 
-def test_main_job_reports_a_node_that_stops_early():
+@pytest.mark.parametrize("param, fragment", [
+    ("initial_state:=sideways", "initial_state = 'sideways'"),
+    ("record_split_size_bytes:=1", "1 MiB at least"),
+    ("max_speed:=true", "needs publish_clock"),
+])
+def test_main_job_passes_on_a_bad_node_parameter_in_one_line(param, fragment):
     from rosutil import isolate
     isolate()
     proc = subprocess.run([installed("drill_sim"), "run", "--duration", "20", "--no-record",
-                           "--ros-args", "-p", "initial_state:=sideways"], capture_output=True,
-                          text=True, timeout=120)
-    assert proc.returncode == 1
-    assert "stopped early with status 2" in proc.stderr and "initial_state" in proc.stderr
+                           "--ros-args", "-p", param], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0], proc.stderr
     assert "Traceback" not in proc.stderr + proc.stdout
+
+
+def test_stability_shows_the_rig_key_figures():
+    text = run("stability", "--preset", "base").stdout
+    assert "rig: W_s 338 kN, t* 0.210 s, torsional 0.756 Hz (period 1.32 s), axial 5.61 Hz" \
+        in text
+    figures = json.loads(run("stability", "--preset", "deep", "--json").stdout)["si"]["figures"]
+    assert figures["t_star_s"] == pytest.approx(0.364, rel=0.01)
+    assert figures["beta"] == pytest.approx(0.36)

@@ -3,12 +3,20 @@ and the command rule the node and ``bag resim`` share."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import pytest
 
 from drill_sim.core import RPM, Rig, load_preset, session
-from drill_sim.core.diagnostics import ERROR, OK, WARN, regime, rig_status
+from drill_sim.core.diagnostics import (
+    ERROR,
+    OK,
+    WARN,
+    CommandCounts,
+    drilling_regime,
+    rig_status,
+)
 from drill_sim.core.pacing import Pacer, TickStats
 
 
@@ -39,41 +47,77 @@ def samples():
 
 
 QUIET = {"ssi": 0.0, "stick_fraction": 0.0, "bounce_fraction": 0.0}
-GOOD_TICKS = TickStats(ticks=1000, wall_s=1.0, sim_s=1.0, period_p99_s=1.05e-3, overruns=0)
+GOOD_TICKS = TickStats(ticks=1000, wall_s=1.0, sim_s=1.0, period_p99_s=1.05e-3, overruns=0,
+                       period_max_s=1.2e-3)
 RUNNING = {"paused": False, "record_error": None, "command_age_s": 0.2,
            "command_timeout_s": 1.0, "rate_hz": 1000.0, "max_speed": False, "sim_time_s": 12.5}
 
 
-def test_regime_in_words(samples):
-    assert regime(samples["steady"], 0.0) == "drilling"
-    assert regime(samples["stuck"], 0.0) == "stick-slip"
-    assert regime(samples["stuck"], 0.01) == "bouncing"
-    assert regime(samples["off"], 0.01) == "off bottom"
+def _regime(ssi=0.0, stuck=False, off=0.0, now=False, speed=6.0) -> str:
+    return drilling_regime(ssi=ssi, stuck=stuck, off_bottom_fraction=off, off_bottom_now=now,
+                           top_drive_speed_rad_s=speed)
+
+
+def test_drilling_regimes_and_their_thresholds():
+    """The names an engineer uses, at the documented thresholds: a bit swinging 40-350 rpm
+    (SSI 0.81) without stopping is a torsional oscillation, not steady drilling."""
+    assert _regime() == "steady"
+    assert _regime(ssi=0.099) == "steady"
+    assert _regime(ssi=0.1) == "torsional oscillation"
+    assert _regime(ssi=0.81) == "torsional oscillation"
+    assert _regime(ssi=1.3, stuck=True) == "stick-slip"
+    assert _regime(ssi=math.inf, stuck=True, speed=0.0) == "not rotating"
+    assert _regime(ssi=1.3, stuck=True, off=0.02) == "bouncing"
+    assert _regime(off=0.6, now=False) == "bouncing"
+    assert _regime(off=0.5, now=True) == "off bottom"
+    assert _regime(ssi=math.nan) == "steady"                 # an empty window
+
+
+def test_regime_of_rig_states(samples):
+    def status(name, **metrics):
+        return rig_status(samples[name], dict(QUIET, **metrics), GOOD_TICKS, **RUNNING)
+    assert status("steady").values["regime"] == "steady"
+    assert status("stuck", ssi=1.2, stick_fraction=0.3).values["regime"] == "stick-slip"
+    assert status("stuck").values["regime"] == "stick-slip"      # the stick-slip flag is up
+    assert status("off", bounce_fraction=1.0).values["regime"] == "off bottom"
 
 
 def test_a_healthy_rig_is_ok_with_every_value(samples):
-    status = rig_status(samples["steady"], QUIET, GOOD_TICKS, **RUNNING)
-    assert (status.level, status.message) == (OK, "drilling")
+    status = rig_status(samples["steady"], QUIET, GOOD_TICKS, **RUNNING,
+                        commands=CommandCounts(120, 3, 0, 0))
+    assert (status.level, status.message) == (OK, "steady")
     assert status.values == {
-        "tick_rate_hz": "1000.0", "tick_period_p99_ms": "1.050", "overruns": "0",
-        "real_time_factor": "1.000", "regime": "drilling", "ssi": "0.000",
-        "stick_fraction": "0.000", "command_age_s": "0.200", "sim_time_s": "12.500",
-        "paused": "false"}
+        "tick_rate_hz": "1000.0", "tick_period_p99_ms": "1.050", "tick_period_max_ms": "1.200",
+        "overruns": "0", "real_time_factor": "1.000", "regime": "steady", "ssi": "0.000",
+        "stick_fraction": "0.000", "off_bottom_fraction": "0.000", "command_age_s": "0.200",
+        "commands_received": "120", "commands_superseded": "3", "commands_lost": "0",
+        "sim_time_s": "12.500", "paused": "false"}
 
 
-def test_problems_in_order_of_precedence(samples):
+def test_every_active_condition_is_listed_and_the_level_is_the_worst(samples):
+    """A collapsed tick rate does not hide behind a stale command, nor either behind a
+    recording error: all are listed, worst first."""
     s = samples["stuck"]
-    slow = TickStats(ticks=800, wall_s=1.0, sim_s=0.8, period_p99_s=2e-3, overruns=3)
+    slow = TickStats(ticks=300, wall_s=1.0, sim_s=0.3, period_p99_s=20e-3, overruns=30,
+                     period_max_s=0.4)
     stale = dict(RUNNING, command_age_s=5.0)
+    lost = CommandCounts(received=9000, superseded=8000, lost=40000, lost_in_window=12000)
+    status = rig_status(s, QUIET, slow, **stale, commands=lost)
+    assert status.level == WARN
+    parts = status.message.split("; ")
+    assert parts[0] == "tick rate 300 Hz below 1000 Hz"
+    assert parts[1].startswith("12000 commands lost in the last 1.0 s")
+    assert parts[2].startswith("no command for 5.0 s")
     status = rig_status(s, QUIET, slow, **dict(stale, record_error="recording stopped: full"))
-    assert (status.level, status.message) == (ERROR, "recording stopped: full")
+    assert status.level == ERROR
+    assert status.message.startswith("recording stopped: full; tick rate 300 Hz")
+    assert "no command for 5.0 s" in status.message
     status = rig_status(s, QUIET, slow, **dict(stale, paused=True))
     assert (status.level, status.message, status.values["paused"]) == (OK, "paused", "true")
-    status = rig_status(s, QUIET, slow, **stale)
-    assert status.level == WARN and status.message.startswith("no command for 5.0 s")
     status = rig_status(s, QUIET, slow, **RUNNING)
-    assert (status.level, status.message) == (WARN, "tick rate 800 Hz below 1000 Hz")
+    assert (status.level, status.message) == (WARN, "tick rate 300 Hz below 1000 Hz")
     assert status.values["regime"] == "stick-slip"
+    assert status.values["tick_period_max_ms"] == "400.000"
 
 
 def test_slow_ticks_warn_only_after_overruns_and_never_at_max_speed(samples):
@@ -101,8 +145,9 @@ def test_real_time_pacing_follows_the_clock_and_drops_a_backlog():
 
 
 def test_max_speed_pacing_advances_one_tick_per_call():
-    pacer = Pacer(100.0, 1.0, True, window_s=1.0, rig_time_s=5.0, clock=FakeClock())
+    pacer = Pacer(100.0, 3.0, True, window_s=1.0, rig_time_s=5.0, clock=FakeClock())
     assert pacer.target(5.0) == pytest.approx(5.01)
+    assert pacer.tick_s == pytest.approx(0.01)        # what ~/step advances: one tick
 
 
 def test_tick_statistics_over_a_window():
@@ -118,10 +163,12 @@ def test_tick_statistics_over_a_window():
     assert stats.rate_hz == pytest.approx(100 / 0.101)
     assert stats.real_time_factor == pytest.approx(0.1 / 0.101)
     assert 1e-3 <= stats.period_p99_s <= 2e-3
+    assert stats.period_max_s == pytest.approx(2e-3)
     clock.now += 0.5
     pacer.reset(0.0)                                          # the rig restarted at 0 s
     stats = pacer.window(0.25)
     assert stats.ticks == 0 and math.isnan(stats.period_p99_s) and stats.overruns == 1
+    assert math.isnan(stats.period_max_s)
     assert stats.sim_s == pytest.approx(0.25)
 
 
@@ -157,3 +204,24 @@ def test_command_rule_takes_its_field_and_limit():
     assert "[0, 30] rad/s" in expected
     assert session.apply_command(rig, p, "hook_load", "", (0.0, 0.0, math.nan) + (0.0,) * 3)
     assert (rig.commanded_speed_rad_s, rig.commanded_hook_load_n) == (7.0, 2e5)  # held
+
+
+def test_the_steady_start_turns_into_stick_slip_as_node_md_says():
+    """The node's steady start (session.start: no perturbation) on base at 60 rpm and 100 kN:
+    round-off grows into a first stick after ~12 s, then a 1.57 s stick-slip cycle."""
+    preset = load_preset("base")
+    p = {"initial_top_drive_speed_rad_s": 60 * RPM, "initial_weight_on_bit_n": 100e3,
+         "initial_state": "steady"}
+    rig = Rig(preset.rig)
+    session.start(rig, p)
+    onsets, was_stuck, k = [], False, 0
+    while len(onsets) < 4:
+        k += 1
+        rig.advance_to(k * 1e-3)
+        stuck = rig.sample().stuck
+        if stuck and not was_stuck:
+            onsets.append(k * 1e-3)
+        was_stuck = stuck
+    assert 11.0 < onsets[0] < 13.5
+    periods = [b - a for a, b in itertools.pairwise(onsets[1:])]
+    assert all(p == pytest.approx(1.57, abs=0.03) for p in periods)

@@ -64,6 +64,7 @@ def test_sigterm_shuts_down_cleanly(ros):
     out = proc.proc.stdout.read()
     ros.destroy_subscription(sub)
     assert code == 0 and "Traceback" not in out and "shut down" in out, out
+    assert "rig figures: W_s 338 kN, t* 0.210 s, torsional 0.756 Hz" in out   # at start
 
 
 def test_driver_plays_a_scenario_onto_the_rig(ros, base):

@@ -71,11 +71,20 @@ def test_recorded_session_is_read_by_rosbags_and_mcap_ros2(ros, tmp_path):
         cmds = [store.deserialize_cdr(raw, c.msgtype).twist.angular.z
                 for c, _, raw in r.messages() if c.topic == "/rec/drill_sim/cmd/top_drive"]
         assert cmds == [7.0] * 6
+        statuses = [store.deserialize_cdr(raw, c.msgtype).status[0]
+                    for c, _, raw in r.messages() if c.topic == "/diagnostics"]
+        assert statuses and statuses[0].name == "drill_sim: rig"    # /diagnostics recorded
+        assert "regime" in {kv.key for kv in statuses[-1].values}
     decoded = sum(1 for _ in read_ros2_messages(str(bag / "session_0.mcap")))
     assert decoded == sum(counts.values())
     meta = reader.info(bag).metadata
     assert meta["session"]["preset"] == "base" and "command_line" in meta["session"]
     assert float(meta["groups"]["psi"]) == pytest.approx(13.73, rel=0.01)
+    figures = {k: float(v) for k, v in meta["figures"].items()}    # the rig's key figures
+    assert figures["t_star_s"] == pytest.approx(0.210, rel=0.01)
+    assert figures["torsional_frequency_hz"] == pytest.approx(0.756, rel=0.01)
+    assert figures["axial_frequency_hz"] == pytest.approx(5.61, rel=0.01)
+    assert figures["submerged_weight_n"] == pytest.approx(338.4e3, rel=0.001)
     assert meta["parameters"]["torsional_stiffness_nm_per_rad"].startswith("938")
 
 

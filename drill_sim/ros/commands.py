@@ -1,0 +1,96 @@
+"""The rig node's command subscriptions, taken by the tick instead of dispatched by the executor.
+
+Under rclpy's EventsExecutor every arriving message is one event, and the timer's events queue
+behind them: a flood of commands from another process stopped the ticks for seconds. Here the
+command subscriptions are raw and never handed to the executor; each tick takes at most
+``limit`` messages per topic (the subscription's history depth, so one take empties a full
+queue), decodes them with ``wire.cdr`` and the node applies them in arrival order. However fast
+commands come, a tick does a bounded amount of work for them. What the executor still
+dispatches (timers, services, parameter requests) arrives at human rates.
+
+What is dropped is counted: ``lost`` commands never reached the node (its subscription keeps
+the latest ``depth`` per topic, and a publisher that outruns the ticks overwrites older ones;
+counted from gaps in the publisher's sequence numbers while a topic has one publisher, which
+is the case a flood comes from), and the node counts the ones it took but that a later command
+of the same topic replaced within the same tick.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.node import Node
+from rclpy.type_support import check_is_valid_msg_type
+
+from ..wire import WireError, rig_topics
+from ..wire.cdr import decode_stamped_vectors
+from ..wire.rig_topics import RigTopic
+from .topics import message_class, rclpy_qos
+
+
+@dataclass(frozen=True)
+class Command:
+    """One command message as taken: its topic, its bytes and what they hold."""
+
+    topic: RigTopic
+    data: bytes                      # the CDR bytes as received
+    frame_id: str
+    sec: int
+    nanosec: int
+    six: tuple[float, ...]           # the six float64 (``wire.cdr.VECTOR_FIELDS`` order)
+
+
+class CommandInbox:
+    """Raw subscriptions to the table's command topics on ``node``, outside any executor.
+
+    reliability: the node's ``qos_reliability``; limit: most messages taken per topic and tick.
+    ``received``, ``lost`` and ``undecodable`` count since start."""
+
+    def __init__(self, node: Node, reliability: str, limit: int | None = None) -> None:
+        self._subs: list[tuple[RigTopic, object, type]] = []
+        for t in rig_topics.COMMANDS:
+            qos = t.qos_for(reliability)
+            cls = message_class(t.type_name)
+            check_is_valid_msg_type(cls)             # loads the type support
+            with node.handle:
+                handle = _rclpy.Subscription(node.handle, cls, t.name,
+                                             rclpy_qos(qos).get_c_qos_profile())
+            self._subs.append((t, handle, cls))
+        self.limit = limit or max(t.qos_for(reliability).depth for t in rig_topics.COMMANDS)
+        self.received = self.lost = self.undecodable = 0
+        self._last_sequence: dict[str, int] = {}
+
+    def take(self) -> list[Command]:
+        """What arrived since the last call, at most ``limit`` per topic, each topic's in
+        arrival order; undecodable messages are counted and left out."""
+        out: list[Command] = []
+        for t, handle, cls in self._subs:
+            for _ in range(self.limit):
+                taken = handle.take_message(cls, True)
+                if taken is None:
+                    break
+                data, info = taken
+                self.received += 1
+                self._count_gap(t.name, handle, info.get("publication_sequence_number"))
+                try:
+                    frame_id, sec, nanosec, six = decode_stamped_vectors(data)
+                except WireError:
+                    self.undecodable += 1
+                    continue
+                out.append(Command(t, data, frame_id, sec, nanosec, six))
+        return out
+
+    def _count_gap(self, name: str, handle, sequence: int | None) -> None:
+        """Messages overwritten before they were taken: gaps in one publisher's numbering."""
+        if not sequence:                             # not reported by this middleware
+            return
+        last = self._last_sequence.get(name)
+        self._last_sequence[name] = sequence
+        if last is not None and sequence > last + 1 and handle.get_publisher_count() == 1:
+            self.lost += sequence - last - 1
+
+    def destroy(self) -> None:
+        for _, handle, _ in self._subs:
+            handle.destroy_when_not_in_use()
+        self._subs = []

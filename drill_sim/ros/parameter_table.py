@@ -1,0 +1,191 @@
+"""The rig node's parameters as one table, without ROS: type (the default's), default, unit,
+range with the reason for its bounds, and whether it may change at run time (and why not).
+``ros.parameters`` declares them on the node; msg_docs/node.md documents each row, and
+``tests/test_node_parameters.py`` checks the page against this table.
+
+Physical parameters get the range a real rig can have, so that a run-time change inside its
+range cannot turn the model absurd (a 1 GN string, 13 km of hole in 90 s).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..core import Preset
+from ..core.simulator import DEFAULT_DT
+
+MIB = 1 << 20
+BOOL, INT, FLOAT, STR = bool, int, float, str
+
+
+@dataclass(frozen=True)
+class Spec:
+    """One parameter. ``read_only``: why it cannot change at run time ("" if it can);
+    ``off_or_at_least``: 0 means off, other values must be at least this; ``why``: the reason
+    for the bounds (refusals and msg_docs/node.md say it)."""
+
+    name: str
+    default: object
+    description: str
+    unit: str = ""
+    low: float | None = None
+    high: float | None = None
+    why: str = ""
+    read_only: str = ""
+    choices: tuple[str, ...] = ()
+    off_or_at_least: float | None = None
+
+    @property
+    def kind(self) -> type:
+        return type(self.default)
+
+    def expected(self) -> str:
+        """What the parameter accepts, in words."""
+        unit = f" {self.unit}" if self.unit else ""
+        if self.kind is BOOL:
+            return "true or false"
+        if self.kind is STR:
+            return "one of " + ", ".join(self.choices) if self.choices else "text"
+        what = "a whole number" if self.kind is INT else "a finite number"
+        if self.low is None:
+            return what
+        low = self.low if self.off_or_at_least is None else self.off_or_at_least
+        text = f"{what} from {_number(low, self.kind)} to {_number(self.high, self.kind)}{unit}"
+        return text if self.off_or_at_least is None else "0 (off) or " + text
+
+    def check(self, value: object) -> tuple[object, str | None]:
+        """(the value in the parameter's type, None), or (value, why it is refused). Integers
+        are taken for real numbers, and whole real numbers for integers."""
+        kind = self.kind
+        if kind is FLOAT and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        elif kind is INT and isinstance(value, float) and value.is_integer():
+            value = int(value)
+        ok = isinstance(value, kind) and (kind is BOOL or not isinstance(value, bool))
+        if ok and kind is FLOAT:
+            ok = math.isfinite(value)
+        if ok and kind is STR:
+            ok = not self.choices or value in self.choices
+        if ok and kind in (INT, FLOAT) and self.low is not None:
+            low = self.low
+            if self.off_or_at_least is not None and value != 0:
+                low = self.off_or_at_least
+            ok = low <= value <= self.high
+        if ok:
+            return value, None
+        why = f" ({self.why})" if self.why else ""
+        return value, f"{self.name} = {value!r}: expected {self.expected()}{why}"
+
+
+def _number(x: float, kind: type) -> str:
+    return str(int(x)) if kind is INT else f"{x:g}"
+
+
+# name: (description, unit, low, high, why the bounds)
+MODEL = {
+    "bit_radius_m": ("bit radius a", "m", 0.03, 0.45,
+                     "drag and PDC bits are made from about 2 3/8 in to 36 in in diameter"),
+    "intrinsic_specific_energy_pa": (
+        "intrinsic specific energy epsilon of the rock", "Pa", 1e7, 5e8,
+        "close to the rock's compressive strength: ~10 MPa for soft shales to ~500 MPa for "
+        "the hardest quartzites"),
+    "cutting_inclination": ("cutting-force inclination zeta", "", 0.3, 1.5,
+                            "measured 0.5-0.9 on PDC cutters; wider for other rake angles"),
+    "contact_stress_pa": ("wear-flat contact stress sigma", "Pa", 0.0, 5e8,
+                          "of the order of the rock's strength, like epsilon"),
+    "wear_flat_length_m": ("total wear-flat length l over all blades", "m", 0.0, 0.1,
+                           "0 for a sharp bit; ~10 mm on a worn 8 1/2 in bit; 100 mm is a bit "
+                           "worn far beyond pulling"),
+    "friction_coefficient": ("bit-rock friction coefficient mu", "", 0.05, 1.5,
+                             "rock on cutter under mud: ~0.1 lubricated to ~1 in dry hard rock"),
+    "wear_flat_orientation": ("wear-flat orientation number gamma", "", 0.5, 2.0,
+                              "a geometry number of the bit, ~1 to 4/3 for drag bits"),
+    "bha_mass_kg": ("BHA mass M", "kg", 300.0, 2e5,
+                    "a few slim collars (~0.5 t) to 300 m of 11 in collars (~190 t)"),
+    "bha_inertia_kg_m2": ("BHA polar inertia I", "kg m^2", 0.1, 3000.0,
+                          "slim BHAs (~1 kg m^2) to 300 m of 11 in collars (~1500 kg m^2)"),
+    "torsional_stiffness_nm_per_rad": (
+        "string torsional stiffness C = G J / L of the pipe", "N m/rad", 10.0, 1e5,
+        "10 km of 2 7/8 in pipe (~10) to 100 m of 6 5/8 in pipe (~2e4)"),
+    "submerged_weight_n": ("submerged weight of the string W_s", "N", 1e4, 5e6,
+                           "1 t to 510 t in mud: the heaviest drill strings weigh 3-4 MN"),
+}
+BLADES = "drag bits have 2 to 4 blades, PDC bits 3 to about 12"
+START_ONLY = "read at start-up; restart the node to change it"
+
+
+def specs(preset: Preset) -> list[Spec]:
+    """Every parameter but ``preset`` (declared first, since the others default from it)."""
+    rig = preset.rig
+    t_star = rig.scales.time_s
+    out = [Spec(name, float(getattr(rig, name)), text, unit, low, high, why)
+           for name, (text, unit, low, high, why) in MODEL.items()]
+    out.insert(1, Spec("blade_count", int(rig.blade_count), "number of blades n", "", 2, 12,
+                       BLADES, read_only="it sets the sector of the rock surface the model "
+                       "keeps, so it cannot change while the node runs"))
+    speed = "top drives turn at up to ~250-350 rpm (26-37 rad/s)"
+    out += [
+        Spec("rate_hz", 1000.0, "tick rate of the stepping timer", "Hz", 1.0, 5000.0,
+             "one tick costs ~0.1-0.2 ms in rclpy"),
+        Spec("real_time_factor", 1.0, "simulated seconds per wall second", "", 0.01, 1000.0),
+        Spec("publish_clock", False, "publish /clock with the simulation time (sim-time mode)",
+             read_only="it chooses the node's time: stamps from zero and /clock, or the wall "
+             "clock; " + START_ONLY),
+        Spec("max_speed", False, "with publish_clock: step as fast as possible",
+             read_only="it chooses the node's tick loop; " + START_ONLY),
+        Spec("dt_s", DEFAULT_DT * t_star, "fixed integration step", "s", 1e-7, 0.01,
+             "the model's step must stay well below t* (0.21 s on base)",
+             read_only="the step is fixed for a session (bag resim re-runs it); " + START_ONLY),
+        Spec("qos_reliability", "reliable", "reliability of every rig topic",
+             read_only="publishers and subscriptions are made with it; " + START_ONLY,
+             choices=("reliable", "best_effort")),
+        Spec("command_timeout_s", 1.0, "command age above which /diagnostics warns", "s",
+             0.001, 3600.0),
+        Spec("stick_slip_window_s", 4.0 * math.pi * t_star,
+             "the stick-slip flag stays up this long after a stick", "s", 0.001, 3600.0),
+        Spec("initial_state", "steady", "steady (drilling at the initial commands) or rest "
+             "(at rest initial_gap_m above bottom, hanging, not rotating)",
+             choices=("steady", "rest")),
+        Spec("initial_top_drive_speed_rad_s", preset.top_drive_speed_rad_s,
+             "top-drive speed command at start and after reset", "rad/s", 0.0, 40.0, speed),
+        Spec("initial_weight_on_bit_n", 1e3 * preset.weight_on_bit_kn,
+             "available weight W0 = W_s - H0 at start and after reset", "N", 0.0, 1e6,
+             "bits rarely take more than ~450 kN; never more than W_s"),
+        Spec("initial_gap_m", 0.05, "with initial_state rest: bit height above bottom", "m",
+             0.0, 30.0, "within a stand (~28 m) of bottom"),
+        Spec("max_top_drive_speed_rad_s", 30.0, "top-drive commands above this are refused",
+             "rad/s", 0.0, 40.0, speed),
+        Spec("max_hook_load_n", 2.0 * rig.submerged_weight_n,
+             "hook-load commands above this are refused", "N", 0.0, 1e7,
+             "the largest rigs lift ~9 MN (1000 short tons)"),
+        Spec("hoist_speed_limit_m_s", 0.5, "the string rises no faster than this", "m/s",
+             1e-3, 3.0, "drawworks hoist at up to ~2 m/s"),
+        Spec("diagnostics_period_s", 1.0, "period of /diagnostics", "s", 0.05, 60.0,
+             read_only="its timer is made at start; " + START_ONLY),
+        Spec("record", "", "bag directory to record the session into (rosbag2, MCAP); empty: "
+             "no recording", read_only="the bag is opened at start; " + START_ONLY),
+        Spec("record_split_duration_s", 0.0, "start a new bag file after this long; 0: never",
+             "s", 0.0, 1e7, "a file a second at least: opening and finishing files costs "
+             "milliseconds", off_or_at_least=1.0),
+        Spec("record_split_size_bytes", 0, "start a new bag file past this size; 0: never",
+             "bytes", 0, 2**62, "1 MiB at least: smaller than a chunk, files would split at "
+             "every flush", off_or_at_least=MIB),
+    ]
+    return out
+
+
+PRESET_READ_ONLY = "the preset sets every model parameter's default; " + START_ONLY
+SPLITS = ("record_split_duration_s", "record_split_size_bytes")
+
+
+def cross_refusal(values: dict[str, object]) -> str | None:
+    """Why a set of values does not hold together, or None."""
+    if values["max_speed"] and not values["publish_clock"]:
+        return ("max_speed = true needs publish_clock = true: faster than real time, a "
+                "controller can only follow the simulation on /clock")
+    if values["initial_weight_on_bit_n"] > values["submerged_weight_n"]:
+        return (f"initial_weight_on_bit_n = {values['initial_weight_on_bit_n']:g} N exceeds "
+                f"submerged_weight_n = {values['submerged_weight_n']:g} N: the string cannot "
+                "put more than its own weight on the bit")
+    return None

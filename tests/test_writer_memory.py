@@ -1,0 +1,44 @@
+"""What a bag writer keeps in memory per chunk written (for the file's summary) stays small:
+the node closes a chunk at least every second and ~10 a second at max speed, for hours."""
+
+from __future__ import annotations
+
+import gc
+import tracemalloc
+
+from drill_sim.bag import reader
+from drill_sim.bag.writer import BagWriter
+
+T0 = 1_700_000_000_000_000_000
+TOPICS = [f"/rig/topic_{i}" for i in range(12)]          # as many channels as the node's bag
+
+
+def test_memory_kept_per_chunk_is_a_few_hundred_bytes(tmp_path):
+    w = BagWriter(tmp_path / "many_chunks")            # chunks close on flush only
+    for name in TOPICS:
+        w.add_topic(name, "std_msgs/msg/Float64")
+    data = b"\x00\x01\x00\x00" + bytes(8)
+    tick = 0
+
+    def chunks(n: int) -> None:               # every topic in every chunk, as the node writes
+        nonlocal tick
+        for _ in range(n):
+            for _ in range(20):
+                tick += 1
+                for name in TOPICS:
+                    w.write(name, data, T0 + tick * 1_000_000)
+            w.flush()
+
+    chunks(200)
+    w._file.writer._pool.submit(lambda: None).result()    # the writing thread caught up
+    gc.collect()
+    tracemalloc.start()
+    before = tracemalloc.get_traced_memory()[0]
+    chunks(1000)
+    w._file.writer._pool.submit(lambda: None).result()
+    gc.collect()
+    per_chunk = (tracemalloc.get_traced_memory()[0] - before) / 1000
+    tracemalloc.stop()
+    w.close()
+    assert per_chunk < 400, f"{per_chunk:.0f} bytes kept per chunk"  # 1.4 kB as records
+    assert reader.info(tmp_path / "many_chunks").message_count == 1200 * 20 * len(TOPICS)
