@@ -17,7 +17,7 @@ from std_msgs.msg import Bool
 from drill_sim.core import load_preset
 from drill_sim.ros.parameter_table import specs
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.parametrize("param, fragment", [
