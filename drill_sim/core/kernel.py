@@ -5,7 +5,7 @@ switches of the laws that it locates):
 
 1. drift half a step: u_m = u + h/2 v, phi_m = phi + h/2 omega, phi_td_m = phi_td + h/2 omega_td
    (the top drive's speed: omega0 in kinematic mode); with a top drive in the loop
-   (``top_drive.drive_step``), its end-of-step speed under the motor torque against the string
+   (``_drive_step``), its end-of-step speed under the motor torque against the string
    torque phi_td_m - phi_m, the PI's P term implicit, its limits clamping the motor torque;
 2. evaluate the depth of cut delta = u_m - S(phi_m) on the rock surface left by earlier passes
    (``_surface_at``);
@@ -39,8 +39,6 @@ import math
 import numpy as np
 from numba import njit
 
-from .top_drive import MODE_KINEMATIC, MODE_SPEED, drive_step
-
 # float state x
 X_TAU, X_U, X_V, X_PHI, X_OMEGA, X_PHI_TD = 0, 1, 2, 3, 4, 5
 X_S_BEHIND = 6      # surface value of the last node passed, from before this pass
@@ -67,6 +65,7 @@ K_REFUSED = 4       # 1 if the last call stopped before a step turning the bit o
 NK = 5
 
 REGIME_ROTATING, REGIME_STUCK, REGIME_OFF_BOTTOM = 0, 1, 2
+MODE_KINEMATIC, MODE_SPEED, MODE_TORQUE = 0, 1, 2   # the top drive's (top_drive.MODES)
 
 EVENT_MARGIN = 1e-9     # a switch closer than this (fraction of the step) to its ends is not split
 MAX_SPLITS = 2          # switches located per step
@@ -225,6 +224,36 @@ def _bit_rock_law(delta, slope, regime, v, om, ts, w0, om_top, n, lam, beta, h, 
 
 
 @njit(cache=True, inline="always")
+def _drive_step(mode, om_td, integral, tm, ref, ts, om_set, t_cmd, step, hj, kp, t_lo, t_hi,
+               c_end, c_mean):
+    """One step h of the top drive; returns (Omega_TD+, T_m+, reference+, mean T_m).
+
+    The reference (``t_cmd`` in torque mode; in speed mode the PI kp (om_set - mean Omega_TD)
+    + ``integral``, its integral term at the step's midpoint) is limited to ``step`` (the rate
+    limit times h) from the last reference ``ref`` and to [t_lo, t_hi]; the motor torque T_m
+    follows it through the lag (weights ``c_end``, ``c_mean`` of ``DriveGroups.lag_weights``);
+    the top drive (``hj`` = h/j) turns under the mean T_m against the string's torque ``ts`` at
+    the midpoint. The P term is implicit in Omega_TD+ (a linear equation; with the limits a
+    monotone one, so the clamped branch is the solution when the unclamped one is out of
+    bounds)."""
+    lo = min(max(ref - step, t_lo), t_hi)
+    hi = min(max(ref + step, t_lo), t_hi)
+    other = (1.0 - c_mean) * tm - ts
+    if mode == MODE_TORQUE:
+        r = min(max(t_cmd, lo), hi)
+        om_new = om_td + hj * (c_mean * r + other)
+    else:
+        half = 0.5 * kp
+        a = kp * om_set - half * om_td + integral
+        om_new = (om_td + hj * (c_mean * a + other)) / (1.0 + hj * c_mean * half)
+        r = a - half * om_new
+        if r > hi or r < lo:
+            r = min(max(r, lo), hi)
+            om_new = om_td + hj * (c_mean * r + other)
+    return om_new, tm + c_end * (r - tm), r, tm + c_mean * (r - tm)
+
+
+@njit(cache=True, inline="always")
 def _hoist_limit(v_new, v_min, hpsi):
     """The drawworks holds the string back: v+ >= v_min; returns (v+, hoist force)."""
     if v_new < v_min:
@@ -351,7 +380,7 @@ def _located_step(x, k, surf, p, c, acc, event):
                 c_mean = 1.0 - c_end * lag / hs
             if mode == MODE_SPEED:
                 integral_m = integral + h2 * ki * (om0 - om_td)
-            om_td_new, tm_new, ref_new, t_bar = drive_step(
+            om_td_new, tm_new, ref_new, t_bar = _drive_step(
                 mode, om_td, integral_m, tm, ref, ts, om0, t_cmd, rate * hs, hs / j_td, kp, t_min,
                 t_max, c_end, c_mean)
             om_td_bar = 0.5 * (om_td + om_td_new)
@@ -471,7 +500,7 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
         if drive:
             if mode == MODE_SPEED:
                 integral_m = integral + h2 * ki * (om0 - om_td)
-            om_td_new, tm_new, ref_new, t_bar = drive_step(
+            om_td_new, tm_new, ref_new, t_bar = _drive_step(
                 mode, om_td, integral_m, tm, ref, ts, om0, t_cmd, rate_step, hj, kp, t_min, t_max,
                 c_end, c_mean)
             om_td_bar = 0.5 * (om_td + om_td_new)

@@ -1,5 +1,5 @@
-"""The top drive (model contract, section 9): its parameters in SI and dimensionless, and its
-law for one step of the stepper.
+"""The top drive (model contract, section 9): its parameters in SI and dimensionless (its law
+for one step is the kernel's ``_drive_step``).
 
 J_TD dOmega_TD/dt = T_m - T_string, T_string = C (Phi_TD - Phi). The motor torque T_m is the
 drive's output: a reference (``speed`` mode: the drive's PI on Omega_set - Omega_TD;
@@ -17,12 +17,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-from numba import njit
-
+from .kernel import MODE_KINEMATIC, MODE_SPEED, MODE_TORQUE
 from .parameters import ParameterError, Scales, check_number
 
 MODES = ("kinematic", "speed", "torque")
-MODE_KINEMATIC, MODE_SPEED, MODE_TORQUE = 0, 1, 2
+_CODES = {"kinematic": MODE_KINEMATIC, "speed": MODE_SPEED, "torque": MODE_TORQUE}
 
 DEFAULT_INERTIA_KG_M2 = 2900.0      # Simulator4nDOF's TopDriveInertia
 DEFAULT_TORQUE_LIMIT_NM = 60e3      # Simulator4nDOF's MaximumTopDriveTorque
@@ -133,7 +132,7 @@ class DriveGroups:
 
     @property
     def code(self) -> int:
-        return MODES.index(self.mode)
+        return _CODES[self.mode]
 
     def fastest_frequency(self) -> float:
         """[1/t*] of the drive's fastest mode: the two inertias on the string,
@@ -150,33 +149,3 @@ class DriveGroups:
             return 1.0, 1.0
         x = h / self.lag
         return -math.expm1(-x), 1.0 + math.expm1(-x) / x
-
-
-@njit(cache=True, inline="always")
-def drive_step(mode, om_td, integral, tm, ref, ts, om_set, t_cmd, step, hj, kp, t_lo, t_hi,
-               c_end, c_mean):
-    """One step h of the top drive; returns (Omega_TD+, T_m+, reference+, mean T_m).
-
-    The reference (``t_cmd`` in torque mode; in speed mode the PI kp (om_set - mean Omega_TD)
-    + ``integral``, its integral term at the step's midpoint) is limited to ``step`` (the rate
-    limit times h) from the last reference ``ref`` and to [t_lo, t_hi]; the motor torque T_m
-    follows it through the lag (weights ``c_end``, ``c_mean`` of ``DriveGroups.lag_weights``);
-    the top drive (``hj`` = h/j) turns under the mean T_m against the string's torque ``ts`` at
-    the midpoint. The P term is implicit in Omega_TD+ (a linear equation; with the limits a
-    monotone one, so the clamped branch is the solution when the unclamped one is out of
-    bounds)."""
-    lo = min(max(ref - step, t_lo), t_hi)
-    hi = min(max(ref + step, t_lo), t_hi)
-    other = (1.0 - c_mean) * tm - ts
-    if mode == MODE_TORQUE:
-        r = min(max(t_cmd, lo), hi)
-        om_new = om_td + hj * (c_mean * r + other)
-    else:
-        half = 0.5 * kp
-        a = kp * om_set - half * om_td + integral
-        om_new = (om_td + hj * (c_mean * a + other)) / (1.0 + hj * c_mean * half)
-        r = a - half * om_new
-        if r > hi or r < lo:
-            r = min(max(r, lo), hi)
-            om_new = om_td + hj * (c_mean * r + other)
-    return om_new, tm + c_end * (r - tm), r, tm + c_mean * (r - tm)
