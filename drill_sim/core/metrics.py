@@ -38,9 +38,11 @@ class Metrics:
     work_weight: float             # [F* L*]
     work_hoist: float              # [F* L*]
     dissipated_axial: float        # [F* L*]
-    mean_top_drive_speed: float    # the top drive's (kinematic mode: mean_omega0)
-    mean_motor_torque: float       # [C] (kinematic mode: the string's, which imposes omega0)
-    work_motor: float              # [C] (kinematic mode: work_top_drive)
+    # the top drive (kinematic mode: mean_omega0, the string's torque, work_top_drive); NaN
+    # when built without them
+    mean_top_drive_speed: float = math.nan
+    mean_motor_torque: float = math.nan    # [C]
+    work_motor: float = math.nan           # [C]
 
     @classmethod
     def from_accumulators(cls, acc: np.ndarray) -> Metrics:
