@@ -419,8 +419,7 @@ def _located_step(x, k, surf, p, c, acc, event):
         sum_w += w * (hs / h)
         sum_t += t * (hs / h)
         u, v, phi, om, ptd = u_new, v_new, phi_new, om_new, ptd_m + h2 * om_td_new
-        if drive:
-            a_otd += hs * om_td_bar
+        if drive:               # (A_OMEGA_TD: _steps books the top drive's turn)
             a_tm += hs * t_bar
             a_wm += hs * t_bar * om_td_bar
             a_wtd += hs * ts * om_td_bar
@@ -451,7 +450,36 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     turn the bit forward by more than a sector 2 pi/n is refused: the rock surface cannot be
     swept (every node would be passed more than once) nor the depth of cut measured; the call
     stops before it, state as after the previous step, K_REFUSED = 1.
+
+    The loop is compiled twice (``_steps`` with ``drive`` a constant): without the top drive's
+    branch for kinematic mode, so the seed's loop keeps its speed, and with it.
     """
+    if p[P_MODE] != MODE_KINEMATIC:
+        return _steps_drive(x, k, surf, p, c, acc, n_steps, out, out_every, out_row)
+    om0 = c[C_OMEGA0]       # the ideal speed source: its torque is the string's
+    x[X_OMEGA_TD] = om0
+    ts0_sum, steps0 = acc[A_TS], k[K_STEPS]
+    out_row = _steps_kinematic(x, k, surf, p, c, acc, n_steps, out, out_every, out_row)
+    acc[A_WORK_MOTOR] += om0 * (acc[A_TS] - ts0_sum)
+    acc[A_TM] += acc[A_TS] - ts0_sum
+    acc[A_OMEGA_TD] += (k[K_STEPS] - steps0) * p[P_H] * om0
+    return out_row
+
+
+@njit(cache=True)
+def _steps_kinematic(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
+    return _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, False)
+
+
+@njit(cache=True)
+def _steps_drive(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
+    return _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, True)
+
+
+@njit(cache=True, inline="always")
+def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
+    """``advance``'s loop; ``drive`` (a constant where it is inlined): the top drive is in the
+    loop (speed or torque mode), not the ideal speed source."""
     n = p[P_N]
     lam = p[P_LAM]
     beta = p[P_BETA]
@@ -465,7 +493,6 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     v_min = c[C_V_MIN]
     t_cmd = c[C_T_CMD]
     mode = np.int64(p[P_MODE])
-    drive = mode != MODE_KINEMATIC
     j_td, t_max, t_min, rate, kp, ki = (p[P_J], p[P_T_MAX], p[P_T_MIN], p[P_RATE], p[P_KP],
                                         p[P_KI])
     c_end, c_mean = p[P_LAG_END], p[P_LAG_MEAN]
@@ -479,9 +506,12 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
 
     (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t, k_last,
      regime, a_om_min, a_om_max, a) = _load(x, k, acc)
-    om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd = _load_drive(x, acc)
-    if not drive:
-        om_td = om0                                 # the ideal speed source
+    if drive:
+        om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd = _load_drive(x, acc)
+    else:                   # the ideal speed source (``advance`` books its drive integrals)
+        om_td = om0
+        integral = tm = ref = a_otd = a_tm = a_wm = a_wtd = 0.0
+    ptd0 = ptd
     steps, sampled = k[K_STEPS], k[K_SAMPLED]
     steps0 = steps
     ts0_sum, v0_sum = acc[A_TS], acc[A_V]
@@ -514,11 +544,13 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             # a law switches inside the step: take it in parts (rare)
             _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta,
                    g, sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
-            _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd)
+            if drive:   # (kinematic mode: the parts leave the drive's state as it is)
+                _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd)
             _located_step(x, k, surf, p, c, acc, event)
             (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t,
              k_last, regime, a_om_min, a_om_max, a) = _load(x, k, acc)
-            om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd = _load_drive(x, acc)
+            if drive:
+                om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd = _load_drive(x, acc)
             if k[K_REFUSED]:
                 break
         else:
@@ -559,7 +591,6 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             om = om_new
             ptd = ptd_m + h2 * om_td_new
             if drive:
-                a_otd += h * om_td_bar
                 a_tm += h * t_bar
                 a_wm += h * t_bar * om_td_bar
                 a_wtd += h * ts * om_td_bar
@@ -604,16 +635,15 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
 
     _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
            sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
-    _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd)
+    if drive:
+        a_otd += ptd - ptd0     # the integral of omega_td: the top drive's turn, exactly
+        _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd)
     k[K_STEPS], k[K_SAMPLED] = steps, sampled
     acc[A_W], acc[A_T] = a_w, a_t
     # integrals of the commands times a state: the commands are held over the call
     acc[A_TIME] += (steps - steps0) * h
     if not drive:           # the ideal speed source: its torque is the string's
         acc[A_WORK_TOP_DRIVE] += om0 * (acc[A_TS] - ts0_sum)
-        acc[A_WORK_MOTOR] += om0 * (acc[A_TS] - ts0_sum)
-        acc[A_TM] += acc[A_TS] - ts0_sum
-        acc[A_OMEGA_TD] += (steps - steps0) * h * om0
     acc[A_WORK_WEIGHT] += w0 * (acc[A_V] - v0_sum)
     acc[A_W0] += (steps - steps0) * h * w0
     acc[A_OMEGA0] += (steps - steps0) * h * om0
