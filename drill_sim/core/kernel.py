@@ -441,7 +441,6 @@ def _located_step(x, k, surf, p, c, acc, event):
     _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd)
 
 
-@njit(cache=True)
 def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     """Advance the state by ``n_steps`` fixed steps; return the next free row of ``out``.
 
@@ -451,15 +450,28 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     swept (every node would be passed more than once) nor the depth of cut measured; the call
     stops before it, state as after the previous step, K_REFUSED = 1.
 
-    The loop is compiled twice (``_steps`` with ``drive`` a constant): without the top drive's
-    branch for kinematic mode, so the seed's loop keeps its speed, and with it.
+    Two entry points share the loop ``_steps``, each compiled when first used and each calling
+    it with ``drive`` a constant (its one call site there, so the compiler inlines it and drops
+    the dead branch): ``advance_kinematic``, the seed's loop at the seed's speed, and
+    ``advance_drive``. This picks the one for the top drive's mode (a caller stepping often
+    keeps ``stepper(mode)`` instead).
     """
-    if p[P_MODE] != MODE_KINEMATIC:
-        return _steps_drive(x, k, surf, p, c, acc, n_steps, out, out_every, out_row)
-    om0 = c[C_OMEGA0]       # the ideal speed source: its torque is the string's
+    return stepper(int(p[P_MODE]))(x, k, surf, p, c, acc, n_steps, out, out_every, out_row)
+
+
+def stepper(mode: int):
+    """The compiled ``advance`` for the top drive's mode (MODE_*)."""
+    return advance_kinematic if mode == MODE_KINEMATIC else advance_drive
+
+
+@njit(cache=True)
+def advance_kinematic(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
+    """``advance`` with the ideal speed source; its drive integrals are booked around the loop
+    (its motor torque is the string's)."""
+    om0 = c[C_OMEGA0]
     x[X_OMEGA_TD] = om0
     ts0_sum, steps0 = acc[A_TS], k[K_STEPS]
-    out_row = _steps_kinematic(x, k, surf, p, c, acc, n_steps, out, out_every, out_row)
+    out_row = _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, False)
     acc[A_WORK_MOTOR] += om0 * (acc[A_TS] - ts0_sum)
     acc[A_TM] += acc[A_TS] - ts0_sum
     acc[A_OMEGA_TD] += (k[K_STEPS] - steps0) * p[P_H] * om0
@@ -467,19 +479,15 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
 
 
 @njit(cache=True)
-def _steps_kinematic(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
-    return _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, False)
-
-
-@njit(cache=True)
-def _steps_drive(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
+def advance_drive(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
+    """``advance`` with the top drive in the loop (speed or torque mode)."""
     return _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, True)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
-    """``advance``'s loop; ``drive`` (a constant where it is inlined): the top drive is in the
-    loop (speed or torque mode), not the ideal speed source."""
+    """``advance``'s loop; ``drive`` (a constant at each call): the top drive is in the loop
+    (speed or torque mode), not the ideal speed source."""
     n = p[P_N]
     lam = p[P_LAM]
     beta = p[P_BETA]

@@ -314,6 +314,7 @@ class Simulator:
         self._write_drive(drive)
 
     def _write_drive(self, d: DriveGroups) -> None:
+        self._advance = kn.stepper(d.code)
         p = self._p
         p[kn.P_MODE], p[kn.P_J], p[kn.P_T_MAX], p[kn.P_T_MIN] = d.code, d.j, d.t_max, d.t_min
         p[kn.P_RATE], p[kn.P_LAG], p[kn.P_KP], p[kn.P_KI] = d.rate, d.lag, d.kp, d.ki
@@ -335,8 +336,8 @@ class Simulator:
 
         Raises ParameterError, the state left after the last step taken, before a step that
         would turn the bit more than a sector (see ``kernel.advance``)."""
-        kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc, n_steps,
-                   self._no_rows, 1, 0)
+        self._advance(self._x, self._k, self._surf, self._p, self._c, self._acc, n_steps,
+                      self._no_rows, 1, 0)
         if self._k[kn.K_REFUSED]:
             self._refuse_step()
 
@@ -353,8 +354,8 @@ class Simulator:
         """Advance and write a row to ``out`` at every step count that is a multiple of ``every``;
         return the next free row. A row is a sample: its w and t are the means over the steps
         since the previous sample (a row, ``take_force_sums``, ``start_sample``, a start)."""
-        row = int(kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
-                             n_steps, out, every, row))
+        row = int(self._advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
+                                n_steps, out, every, row))
         if self._k[kn.K_REFUSED]:
             self._refuse_step()
         return row
