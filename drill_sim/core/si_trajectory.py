@@ -14,7 +14,7 @@ import numpy as np
 from .parameters import Scales
 
 if TYPE_CHECKING:
-    from .simulator import Trajectory
+    from .trajectory import Trajectory
 
 
 @dataclass(frozen=True)
