@@ -2,7 +2,8 @@
 
 Prints (issue targets in brackets):
   - steps per second of the stepper, base preset in stick-slip at the default dt, one core,
-    after JIT warm-up [>= 20 million];
+    after JIT warm-up [>= 20 million]: the seed's kinematic top drive, then the top drive in the
+    loop under its speed PI (``speed`` mode, the preset's drive);
   - real-time factor, simulated seconds per wall second [>= 1000];
   - time from a fresh process start to the first completed step, numba cache warm [< 1 s]
     and cold (an empty cache directory).
@@ -12,6 +13,7 @@ Run: .venv/bin/python benchmarks/bench_core.py
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import subprocess
 import sys
@@ -27,10 +29,11 @@ FIRST_STEP = (
 )
 
 
-def steps_per_second(steps: int = 20_000_000, repeats: int = 5) -> tuple[float, float, float]:
+def steps_per_second(steps: int = 20_000_000, repeats: int = 5,
+                     mode: str = "kinematic") -> tuple[float, float, float]:
     from drill_sim.core import Rig, load_preset
     preset = load_preset("base")
-    rig = Rig(preset.rig)
+    rig = Rig(preset.rig, top_drive=dataclasses.replace(preset.top_drive, top_drive_mode=mode))
     rig.start_steady(preset.top_drive_speed_rad_s, preset.hook_load_n, 1e-3)
     rig.advance(30.0)                                  # warm-up and into stick-slip
     best = float("inf")
@@ -55,9 +58,10 @@ def first_step_seconds(cache_dir: str | None) -> float:
 
 
 def main() -> None:
-    rate, rtf, stick = steps_per_second()
-    print(f"stepper: {rate / 1e6:.1f} million steps/s, real-time factor {rtf:.0f} "
-          f"(base preset, default dt, stick fraction {stick:.2f})")
+    for mode in ("kinematic", "speed"):
+        rate, rtf, stick = steps_per_second(mode=mode)
+        print(f"stepper, {mode} top drive: {rate / 1e6:.1f} million steps/s, real-time factor "
+              f"{rtf:.0f} (base preset, default dt, stick fraction {stick:.2f})")
     with tempfile.TemporaryDirectory() as cold:
         cold_s = first_step_seconds(cold)
         first_step_seconds(None)                       # make sure the default cache is warm

@@ -26,6 +26,7 @@ from .single import (
     RUN_OPTIONS,
     Timing,
     add_run_arguments,
+    resolve_drive,
     resolve_start,
     resolve_timing,
     run_settings,
@@ -58,6 +59,7 @@ def run(args: argparse.Namespace) -> int:
     first = grid.case(0)
     timing = resolve_timing(args, first, 60.0, 300.0)
     gap, perturbation = resolve_start(args, first)
+    drive = resolve_drive(args, first)
     if args.scheduler is not None and args.workers is not None:
         raise UsageError(f"--workers {args.workers} with --scheduler {args.scheduler}: the "
                          "cluster's workers run the points; expected one of them")
@@ -76,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"--plot {args.plot}: the map has {grid.x_values.size} x "
                              f"{grid.y_values.size} points; expected at least two values of "
                              f"{grid.x.option} and of {grid.y.option}")
-    points = [run_settings(grid.case(p), timing, args.start, gap, perturbation,
+    points = [run_settings(grid.case(p), timing, args.start, gap, perturbation, drive=drive,
                            where=f" at {grid.label(p)}", string_model=args.string_model)
               for p in range(grid.size)]
     _preflight(grid, points)

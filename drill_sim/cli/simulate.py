@@ -16,12 +16,21 @@ from .case import Case, add_model_arguments, resolve_case
 from .checks import in_range, json_line, number, output_file, plot_file, typed
 from .errors import UsageError
 from .plot import plot_time_series
-from .single import add_run_arguments, amount, resolve_start, resolve_timing, run_settings
+from .single import (
+    Drive,
+    add_run_arguments,
+    amount,
+    resolve_drive,
+    resolve_start,
+    resolve_timing,
+    run_settings,
+)
 
 SI_COLUMNS = ("time_s", "bit_speed_rad_s", "rop_m_s", "wob_n", "tob_nm", "surface_torque_nm",
-              "depth_of_cut_m", "bit_depth_m", "top_drive_speed_rad_s", "stuck", "off_bottom")
+              "depth_of_cut_m", "bit_depth_m", "top_drive_speed_rad_s", "stuck", "off_bottom",
+              "top_drive_speed_setpoint_rad_s", "motor_torque_nm")
 GROUP_COLUMNS = ("tau", "omega", "v", "w", "t", "ts", "delta_n", "u", "omega0", "stuck",
-                 "off_bottom")
+                 "off_bottom", "omega_td", "motor_torque")
 
 
 # The documented limits (msg_docs/cli.md, "Limits"); the run's own are in cli/single.py.
@@ -57,14 +66,16 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         plot_file("--plot", args.plot)
     gap, perturbation = resolve_start(args, case)
-    settings = run_settings(case, timing, args.start, gap, perturbation,
+    drive = resolve_drive(args, case)
+    settings = run_settings(case, timing, args.start, gap, perturbation, drive=drive,
                             string_model=args.string_model)
 
     progress = Progress("simulating")
     result = run_single(settings, output_interval=interval / timing.t_star_s if keep_rows
                         else None, progress=progress)   # None: keep no samples
     progress.close()
-    summary = _summary(case, result.parts[-1], settings.start, duration, timing.window, dt)
+    summary = _summary(case, result.parts[-1], settings.start, duration, timing.window, dt,
+                       drive)
     summary["string_model"] = settings.string_model
 
     if keep_rows:
@@ -110,7 +121,7 @@ def _columns(case: Case, *parts: Trajectory) -> dict[str, np.ndarray]:
 
 
 def _summary(case: Case, run: Trajectory, start: str, duration: float, window: float,
-             dt: float) -> dict:
+             dt: float, drive: Drive | None) -> dict:
     m = run.metrics
     summary: dict = {"mode": "si" if case.si else "dimensionless", "start": start,
                      "duration": duration, "dt": dt,
@@ -126,17 +137,27 @@ def _summary(case: Case, run: Trajectory, start: str, duration: float, window: f
             mean_tob=si["mean_tob_nm"], mean_surface_torque=si["mean_surface_torque_nm"],
             mean_rop=si["mean_rop_m_s"], max_bit_speed=si["max_bit_speed_rad_s"],
             top_drive_speed=case.omega0 / sc.time_s, available_weight=case.w0 * sc.force_n,
+            mean_top_drive_speed=si["mean_top_drive_speed_rad_s"],
+            mean_motor_torque=si["mean_motor_torque_nm"],
+            top_drive=(drive or Drive(case.preset.top_drive)).top_drive.as_dict(),
             units={"time": "s", "mean_bit_speed": "rad/s", "max_bit_speed": "rad/s",
                    "top_drive_speed": "rad/s", "mean_wob": "N", "available_weight": "N",
-                   "mean_tob": "N m", "mean_surface_torque": "N m", "mean_rop": "m/s"})
+                   "mean_tob": "N m", "mean_surface_torque": "N m", "mean_rop": "m/s",
+                   "mean_top_drive_speed": "rad/s", "mean_motor_torque": "N m"})
+        if drive is not None and drive.motor_torque_nm is not None:
+            summary["motor_torque_command"] = drive.motor_torque_nm
+            summary["units"]["motor_torque_command"] = "N m"
     else:
         summary.update(
             ssi=m.ssi, stick_fraction=m.stick_fraction, bounce_fraction=m.bounce_fraction,
             mean_bit_speed=m.mean_bit_speed, mean_wob=m.mean_wob, mean_tob=m.mean_tob,
             mean_surface_torque=m.mean_surface_torque, mean_rop=m.mean_rop,
             max_bit_speed=m.max_bit_speed, omega0=case.omega0, w0=case.w0,
+            mean_top_drive_speed=m.mean_top_drive_speed, mean_motor_torque=m.mean_motor_torque,
+            top_drive={"top_drive_mode": "kinematic"},
             units={"time": "t*", "mean_bit_speed": "1/t*", "mean_wob": "F*", "mean_tob": "C",
-                   "mean_surface_torque": "C", "mean_rop": "L*/t*"})
+                   "mean_surface_torque": "C", "mean_rop": "L*/t*",
+                   "mean_top_drive_speed": "1/t*", "mean_motor_torque": "C"})
     summary["groups"] = {"n": case.groups.n, "psi": case.groups.psi, "lambda": case.groups.lam,
                          "beta": case.groups.beta}
     return {k: (float(v) if isinstance(v, (np.floating, float)) else v)
@@ -183,6 +204,10 @@ def _print_summary(s: dict, args: argparse.Namespace) -> None:
             f"  mean TOB             {s['mean_tob'] / 1e3:10.3f} kN m",
             f"  mean surface torque  {s['mean_surface_torque'] / 1e3:10.3f} kN m",
             f"  mean ROP             {s['mean_rop'] * 3600:10.2f} m/h"]
+        mode = s["top_drive"]["top_drive_mode"]
+        if mode != "kinematic":
+            lines += [f"  top drive            {s['mean_top_drive_speed'] / RPM:10.2f} rpm "
+                      f"({mode} mode), motor torque {s['mean_motor_torque'] / 1e3:.3f} kN m"]
     else:
         lines += [f"  mean {k:<20} {s[k]:10.4g} {u[k]}" for k in
                   ("mean_bit_speed", "mean_wob", "mean_tob", "mean_surface_torque", "mean_rop")]

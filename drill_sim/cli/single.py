@@ -1,6 +1,6 @@
 """The options of one simulation that ``simulate`` and ``map`` share: time step, duration,
-metrics window, start, gap and perturbation, each checked within its documented range
-(msg_docs/cli.md, "Limits") and turned, with a ``Case``, into a ``RunSettings``.
+metrics window, start, gap, perturbation and the top drive, each checked within its documented
+range (msg_docs/cli.md, "Limits") and turned, with a ``Case``, into a ``RunSettings``.
 
 Both commands build their runs with ``run_settings`` and run them with
 ``drill_sim.study.run_single``, so a map point is the simulation ``simulate`` runs, bit for bit.
@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import argparse
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..core import DEFAULT_DT, NoSteadyDrilling, steady_state
 from ..core.distributed import STRING_MODELS, geometry_waves
+from ..core.simulator import max_step
+from ..core.top_drive import MODES, TopDriveParameters
 from ..study.single import RunSettings, default_start
 from .case import Case
 from .checks import in_range, number, typed
@@ -28,8 +30,33 @@ STEPS_PER_S = 20e6             # for the time estimate in a refusal
 GAP_MAX_M = 10.0               # bit height above bottom, SI [m]
 GAP_MAX = 1e4                  # the same, dimensionless [L*]
 PERTURBATION_RANGE = (-0.9, 1.0)
-RUN_OPTIONS = ("start", "gap", "perturbation",   # as typed; the times are in ``Timing``
+# the top drive's options: (dest, unit, SI factor, low, high, what), ranges in the unit
+DRIVE_OPTIONS = (
+    ("top_drive_inertia", "kg m^2", 1.0, 1.0, 1e5, "a top-drive inertia",
+     "top_drive_inertia_kg_m2"),
+    ("motor_torque_max_knm", "kN m", 1e3, 0.0, 1000.0, "a largest motor torque",
+     "motor_torque_max_nm"),
+    ("motor_torque_min_knm", "kN m", 1e3, -1000.0, 0.0, "a smallest motor torque (0: the "
+     "drive cannot brake)", "motor_torque_min_nm"),
+    ("motor_torque_rate_knm_s", "kN m/s", 1e3, 1e-3, 1e6, "a motor torque rate limit",
+     "motor_torque_rate_nm_s"),
+    ("drive_lag_s", "s", 1.0, 0.0, 10.0, "a motor torque lag", "drive_lag_s"),
+    ("drive_kp", "N m s/rad", 1.0, 0.0, 1e8, "a proportional gain", "drive_kp_nm_s_rad"),
+    ("drive_ki", "N m/rad", 1.0, 0.0, 1e9, "an integral gain", "drive_ki_nm_rad"),
+)
+MOTOR_TORQUE_KNM = 1000.0      # |torque mode's command| [kN m]
+RUN_OPTIONS = ("start", "gap", "perturbation", "top_drive_mode",   # as typed; the times are
+               *(o[0] for o in DRIVE_OPTIONS), "motor_torque_knm",  # in ``Timing``
                "string_model")
+
+
+@dataclass(frozen=True)
+class Drive:
+    """The top drive of every run, SI: its parameters and, in torque mode, the motor torque
+    command [N m] (None: the start's, the steady torque or 0 at rest)."""
+
+    top_drive: TopDriveParameters
+    motor_torque_nm: float | None = None
 
 
 @dataclass(frozen=True)
@@ -44,7 +71,7 @@ class Timing:
 
 
 def add_run_arguments(parser: argparse.ArgumentParser, *, duration_default: str) -> None:
-    """--duration, --dt, --metrics-window, --start, --gap and --perturbation."""
+    """--duration, --dt, --metrics-window, --start, --gap, --perturbation and the top drive's."""
     parser.add_argument("--duration", type=number, default=None,
                         help=f"simulated time [s] (SI) or [t*] (groups); default "
                              f"{duration_default}; at most {MAX_STEPS:,} steps")
@@ -65,6 +92,63 @@ def add_run_arguments(parser: argparse.ArgumentParser, *, duration_default: str)
     parser.add_argument("--string-model", choices=STRING_MODELS, default=None,
                         help="the drill string: lumped spring or distributed pipe (SI mode "
                              "only, from the preset's geometry); default: the preset's, lumped")
+    add_drive_arguments(parser)
+
+
+def add_drive_arguments(parser: argparse.ArgumentParser) -> None:
+    """The top drive's options (SI mode): its mode, parameters and torque command."""
+    g = parser.add_argument_group("top drive (SI mode; default: the preset's, kinematic)")
+    g.add_argument("--top-drive-mode", choices=MODES, default=None,
+                   help="kinematic: the ideal speed source of the seed (default); speed: the "
+                        "drive's PI holds --rpm; torque: --motor-torque-knm is the motor torque")
+    for dest, unit, _, low, high, what, _ in DRIVE_OPTIONS:
+        g.add_argument("--" + dest.replace("_", "-"), type=number, default=None,
+                       help=f"{what} [{unit}], {low:g} to {high:g}; default: the preset's")
+    g.add_argument("--motor-torque-knm", type=number, default=None,
+                   help=f"torque mode: the motor torque command [kN m], -{MOTOR_TORQUE_KNM:g} "
+                        f"to {MOTOR_TORQUE_KNM:g}; default: the steady torque (steady start) "
+                        "or 0")
+
+
+def resolve_drive(args: argparse.Namespace, case: Case) -> Drive | None:
+    """The top drive the options describe (None: kinematic in dimensionless mode); options that
+    do nothing in the chosen mode are refused, as are values out of their ranges."""
+    given = [d for d in ("top_drive_mode", *(o[0] for o in DRIVE_OPTIONS), "motor_torque_knm")
+             if getattr(args, d) is not None]
+    if not case.si:
+        if given:
+            raise UsageError(f"--{given[0].replace('_', '-')}: the top drive's options are SI; "
+                             "expected SI mode (--preset) or no top-drive option")
+        return None
+    base = case.preset.top_drive
+    mode = args.top_drive_mode or base.top_drive_mode
+    idle = {"kinematic": [d for d in given if d != "top_drive_mode"],
+            "speed": [d for d in given if d == "motor_torque_knm"],
+            "torque": [d for d in given if d in ("drive_kp", "drive_ki")]}[mode]
+    if idle:
+        needs = ("torque" if idle[0] == "motor_torque_knm" else
+                 "speed" if idle[0] in ("drive_kp", "drive_ki") else "speed or torque")
+        raise UsageError(f"--{idle[0].replace('_', '-')} does nothing with the {mode} top drive; "
+                         f"expected it with --top-drive-mode {needs}")
+    values = {}
+    for dest, unit, factor, low, high, what, field in DRIVE_OPTIONS:
+        value = getattr(args, dest)
+        if value is not None:
+            values[field] = factor * in_range("--" + dest.replace("_", "-"), value, low, high,
+                                              unit=unit, what=what)
+    low = values.get("motor_torque_min_nm", base.motor_torque_min_nm)
+    high = values.get("motor_torque_max_nm", base.motor_torque_max_nm)
+    if not low < high:
+        raise UsageError(f"--motor-torque-min-knm {low / 1e3:g}: not below the largest motor "
+                         f"torque {high / 1e3:g} kN m; expected a smallest motor torque below it")
+    top_drive = replace(base, top_drive_mode="kinematic", **values)
+    if mode == "speed" and top_drive.drive_kp_nm_s_rad is None:
+        raise UsageError(f"--top-drive-mode speed: preset {case.preset.name!r} has no string "
+                         "geometry for the default gain 50 Z; expected --drive-kp")
+    torque = None if args.motor_torque_knm is None else 1e3 * in_range(
+        "--motor-torque-knm", args.motor_torque_knm, -MOTOR_TORQUE_KNM, MOTOR_TORQUE_KNM,
+        unit="kN m", what="a motor torque command")
+    return Drive(replace(top_drive, top_drive_mode=mode), torque)
 
 
 def resolve_timing(args: argparse.Namespace, case: Case, default_s: float,
@@ -93,11 +177,13 @@ def resolve_start(args: argparse.Namespace, case: Case) -> tuple[float, float]:
 
 
 def run_settings(case: Case, timing: Timing, start: str | None, gap: float,
-                 perturbation: float, *, where: str = "",
-                 string_model: str | None = None) -> RunSettings:
+                 perturbation: float, *, drive: Drive | None = None,
+                 where: str = "", string_model: str | None = None) -> RunSettings:
     """The run of ``case``: ``start`` None picks steady drilling when it exists; ``gap`` is in
-    m (SI) or L*. A steady start where there is none is a UsageError (``where`` names the
-    point, for a map). ``string_model`` None is the preset's (lumped in groups mode)."""
+    m (SI) or L*; ``drive`` the top drive (None: kinematic). A steady start where there is none
+    (or that the drive's torque limits cannot hold), or a step that cannot resolve the top
+    drive, is a UsageError (``where`` names the point, for a map). ``string_model`` None is the
+    preset's (lumped in groups mode); the distributed string runs with the kinematic drive."""
     speed = "--rpm" if case.si else "--omega0"
     start = start or default_start(case.groups, case.w0, case.omega0)
     if start == "steady" and case.omega0 == 0:
@@ -109,11 +195,36 @@ def run_settings(case: Case, timing: Timing, start: str | None, gap: float,
         except NoSteadyDrilling as exc:
             raise UsageError(f"--start steady{where}: {exc}") from None
     t_star = timing.t_star_s
+    waves = string_waves(case, string_model, timing.dt / t_star)
+    if waves is not None and drive is not None and drive.top_drive.top_drive_mode != "kinematic":
+        raise UsageError(f"--string-model distributed with --top-drive-mode "
+                         f"{drive.top_drive.top_drive_mode}{where}: the distributed string runs "
+                         "with the kinematic top drive; expected one of the two")
+    groups, torque = None, None
+    if drive is not None and drive.top_drive.top_drive_mode != "kinematic":
+        rig = case.preset.rig
+        groups = drive.top_drive.groups(rig.scales, rig.bha_inertia_kg_m2)
+        limit = max_step(case.groups, groups)
+        if timing.dt / t_star > limit * (1.0 + 1e-12):
+            raise UsageError(f"--dt {timing.dt:.4g} s cannot resolve the top drive's fastest "
+                             f"mode{where}: expected at most {limit * t_star:.4g} s, or a "
+                             "heavier --top-drive-inertia")
+        if start == "steady":
+            t0 = steady_state(case.groups, case.w0, case.omega0).t0
+            if not groups.t_min <= t0 <= groups.t_max:
+                c = rig.torsional_stiffness_nm_per_rad
+                raise UsageError(f"--start steady{where}: steady drilling needs a motor torque of "
+                                 f"{t0 * c / 1e3:.4g} kN m, beyond the drive's limits "
+                                 f"{groups.t_min * c / 1e3:g} to {groups.t_max * c / 1e3:g} kN m; "
+                                 "expected --start rest or wider limits")
+        if drive.motor_torque_nm is not None:
+            torque = drive.motor_torque_nm / rig.torsional_stiffness_nm_per_rad
     return RunSettings(
         groups=case.groups, w0=case.w0, omega0=case.omega0, dt=timing.dt / t_star,
         lead=(timing.duration - timing.window) / t_star, window=timing.window / t_star,
         start=start, gap=gap / case.preset.rig.scales.length_m if case.si else gap,
-        perturbation=perturbation, waves=string_waves(case, string_model, timing.dt / t_star))
+        perturbation=perturbation, drive=groups, motor_torque=torque,
+        waves=waves)
 
 
 def string_waves(case: Case, string_model: str | None, dt: float):

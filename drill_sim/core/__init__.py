@@ -11,10 +11,11 @@ from .rig import RPM, Rig, RigSample
 from .si_trajectory import SITrajectory
 from .simulator import DEFAULT_DT, Simulator, StateView, Trajectory
 from .stability import NoSteadyDrilling, StabilityResult, SteadyState, stability, steady_state
+from .top_drive import DriveGroups, TopDriveParameters
 
 __all__ = [
-    "DEFAULT_DT", "RPM", "Groups", "Metrics", "NoSteadyDrilling", "ParameterError", "Preset", "Rig",
-    "RigParameters", "RigSample", "SITrajectory", "Scales", "Simulator", "StabilityResult",
-    "StateView", "SteadyState", "StringGeometry", "Trajectory", "load_preset", "preset_names",
-    "stability", "steady_state",
+    "DEFAULT_DT", "RPM", "DriveGroups", "Groups", "Metrics", "NoSteadyDrilling", "ParameterError",
+    "Preset", "Rig", "RigParameters", "RigSample", "SITrajectory", "Scales", "Simulator",
+    "StabilityResult", "StateView", "SteadyState", "StringGeometry", "TopDriveParameters",
+    "Trajectory", "load_preset", "preset_names", "stability", "steady_state",
 ]

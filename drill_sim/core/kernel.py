@@ -3,7 +3,10 @@
 Scheme (a Moreau midpoint time-stepping scheme, second order in smooth phases and through the
 switches of the laws that it locates):
 
-1. drift half a step: u_m = u + h/2 v, phi_m = phi + h/2 omega, phi_td_m = phi_td + h/2 omega0;
+1. drift half a step: u_m = u + h/2 v, phi_m = phi + h/2 omega, phi_td_m = phi_td + h/2 omega_td
+   (the top drive's speed: omega0 in kinematic mode); with a top drive in the loop
+   (``_drive_step``), its end-of-step speed under the motor torque against the string
+   torque phi_td_m - phi_m, the PI's P term implicit, its limits clamping the motor torque;
 2. evaluate the depth of cut delta = u_m - S(phi_m) on the rock surface left by earlier passes
    (``_surface_at``);
 3. solve the set-valued laws of the model contract (section 2.2, msg_docs/model.md) *implicitly*
@@ -18,6 +21,10 @@ switches of the laws that it locates):
 4. drift the second half with the new velocities and let the blades sweep the surface:
    S(theta) <- max(S(theta), u) at every grid node passed (``_first_swept_node``,
    ``_blade_height``); add the step to the window integrals (``_accumulate``).
+
+The top drive's limits (saturation, rate limit) are clamps of its motor torque, not laws of the
+bit: a clamp that engages inside a step is not located. In kinematic mode (the default) the
+drive's branch is skipped and the arithmetic is the seed's, bit for bit.
 
 The surface is an array of N = 2^m nodes over one sector 2*pi/n, linear between nodes. All state
 lives in preallocated arrays indexed by the constants below, so advancing allocates nothing.
@@ -42,7 +49,12 @@ X_DELTA = 11        # depth of cut per blade during the last step [L*]
 X_G = 12            # wear-flat contact factor during the last step [-]
 X_HOLE = 13         # deepest point of the rock surface, max of S [L*]
 X_SUM_W, X_SUM_T = 14, 15   # sums of w and t over the steps since the last sample (an output
-NX = 16                     # row or a read of the sums); the window's A_W, A_T exclude them
+                            # row or a read of the sums); the window's A_W, A_T exclude them
+X_OMEGA_TD = 16     # top-drive speed [1/t*] (kinematic mode: omega0)
+X_DRIVE_I = 17      # the speed PI's integral term [C]
+X_TM = 18           # motor torque at the end of the last step, after limits and lag [C]
+X_TREF = 19         # the drive's reference after rate limit and saturation (the lag's input) [C]
+NX = 20
 
 # integer state k
 K_LAST = 0          # absolute index of the last surface node the blades passed
@@ -53,29 +65,34 @@ K_REFUSED = 4       # 1 if the last call stopped before a step turning the bit o
 NK = 5
 
 REGIME_ROTATING, REGIME_STUCK, REGIME_OFF_BOTTOM = 0, 1, 2
+MODE_KINEMATIC, MODE_SPEED, MODE_TORQUE = 0, 1, 2   # the top drive's (top_drive.MODES)
 
 EVENT_MARGIN = 1e-9     # a switch closer than this (fraction of the step) to its ends is not split
 MAX_SPLITS = 2          # switches located per step
 
-# parameters p
+# parameters p; the top drive's (P_MODE on) as top_drive.DriveGroups, P_LAG_END and
+# P_LAG_MEAN its lag weights over a whole step
 P_N, P_PSI, P_LAM, P_BETA, P_H, P_DTHETA, P_INV_DTHETA = range(7)
-NP = 7
+(P_MODE, P_J, P_T_MAX, P_T_MIN, P_RATE, P_LAG, P_KP, P_KI, P_LAG_END,
+ P_LAG_MEAN) = range(7, 17)
+NP = 17
 
-# commands c (zero-order hold between calls)
+# commands c (zero-order hold between calls); C_OMEGA0 is the drive's set-point in speed mode
 C_W0, C_OMEGA0, C_V_MIN = 0, 1, 2   # C_V_MIN: lowest axial velocity (hoisting-speed limit)
-NC = 3
+C_T_CMD = 3                         # motor torque command, torque mode [C]
+NC = 4
 
 # accumulators a, integrals over the metrics window (A_W, A_T up to the last sample: add
 # h X_SUM_W, h X_SUM_T for the window's integrals)
 (A_TIME, A_OMEGA, A_OMEGA_MIN, A_OMEGA_MAX, A_W, A_T, A_TS, A_V, A_STICK_TIME, A_BOUNCE_TIME,
  A_WORK_TOP_DRIVE, A_WORK_WEIGHT, A_WORK_HOIST, A_DISSIPATED_ROT, A_DISSIPATED_AX,
- A_W0, A_OMEGA0) = range(17)
-NA = 17
+ A_W0, A_OMEGA0, A_OMEGA_TD, A_TM, A_WORK_MOTOR) = range(20)
+NA = 20     # A_WORK_TOP_DRIVE: work of the string's top torque; A_WORK_MOTOR: of the motor
 
 # output columns (O_W, O_T: means over the steps since the previous sample or row)
 (O_TAU, O_U, O_V, O_PHI, O_OMEGA, O_PHI_TD, O_W, O_T, O_TS, O_DELTA, O_REGIME, O_W0, O_OMEGA0,
- O_G) = range(14)
-NO = 14
+ O_G, O_OMEGA_TD, O_TM) = range(16)
+NO = 16     # O_TM: motor torque (kinematic mode: the string torque, which imposes omega0)
 
 
 @njit(cache=True, inline="always")
@@ -150,17 +167,18 @@ def _crossing(earliest, start, end):
 
 
 @njit(cache=True, inline="always")
-def _bit_rock_law(delta, slope, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi):
+def _bit_rock_law(delta, slope, regime, v, om, ts, w0, om_top, n, lam, beta, h, hpsi):
     """The set-valued bit-rock laws for one step; returns (regime, w, t, g, v+, omega+, event).
 
     Off bottom (delta < 0) nothing acts; in contact a stuck bit stays stuck while the stick law
     holds, otherwise the contact law gives g and v+, and a bit that would turn backwards is
     stuck instead (no backward rotation in contact). ``event`` locates the first switch of a
     law inside the step, as a fraction of it (>= 1: none): the bit stops turning (omega
-    crosses 0), breaks away (T_s crosses T_max, T_s rising at omega0 while stuck), its wear
-    flats engage or lift off (V crosses 0), or it lands or leaves the rock (delta crosses 0,
-    delta at the step's ends from its rate V - S' omega, S' the surface's ``slope``). The laws
-    are linear between switches, so each crossing is interpolated linearly over the step.
+    crosses 0), breaks away (T_s crosses T_max, T_s rising at the top drive's mean speed over
+    the step ``om_top`` while stuck), its wear flats engage or lift off (V crosses 0), or it
+    lands or leaves the rock (delta crosses 0, delta at the step's ends from its rate
+    V - S' omega, S' the surface's ``slope``). The laws are linear between switches, so each
+    crossing is interpolated linearly over the step.
     """
     event = 2.0
     if delta < 0.0:
@@ -176,7 +194,7 @@ def _bit_rock_law(delta, slope, regime, v, om, ts, w0, om0, n, lam, beta, h, hps
         if regime == REGIME_STUCK:
             t_max = _breakaway_torque(v, hpsi, w0, nd, beta * lam)
             stuck = ts <= t_max
-            rise = h * om0                       # T_s over the step, the bit held
+            rise = h * om_top                    # T_s over the step, the bit held
             if ts + 0.5 * rise > t_max and rise > 0.0:
                 event = _crossing(event, t_max - (ts - 0.5 * rise), t_max - (ts + 0.5 * rise))
         if not stuck:
@@ -203,6 +221,36 @@ def _bit_rock_law(delta, slope, regime, v, om, ts, w0, om0, n, lam, beta, h, hps
     if (delta_start < 0.0) != (delta_end < 0.0):
         event = _crossing(event, delta_start, delta_end)
     return regime, w, t, g, v_new, om_new, event
+
+
+@njit(cache=True, inline="always")
+def _drive_step(mode, om_td, integral, tm, ref, ts, om_set, t_cmd, step, hj, kp, t_lo, t_hi,
+               c_end, c_mean):
+    """One step h of the top drive; returns (Omega_TD+, T_m+, reference+, mean T_m).
+
+    The reference (``t_cmd`` in torque mode; in speed mode the PI kp (om_set - mean Omega_TD)
+    + ``integral``, its integral term at the step's midpoint) is limited to ``step`` (the rate
+    limit times h) from the last reference ``ref`` and to [t_lo, t_hi]; the motor torque T_m
+    follows it through the lag (weights ``c_end``, ``c_mean`` of ``DriveGroups.lag_weights``);
+    the top drive (``hj`` = h/j) turns under the mean T_m against the string's torque ``ts`` at
+    the midpoint. The P term is implicit in Omega_TD+ (a linear equation; with the limits a
+    monotone one, so the clamped branch is the solution when the unclamped one is out of
+    bounds)."""
+    lo = min(max(ref - step, t_lo), t_hi)
+    hi = min(max(ref + step, t_lo), t_hi)
+    other = (1.0 - c_mean) * tm - ts
+    if mode == MODE_TORQUE:
+        r = min(max(t_cmd, lo), hi)
+        om_new = om_td + hj * (c_mean * r + other)
+    else:
+        half = 0.5 * kp
+        a = kp * om_set - half * om_td + integral
+        om_new = (om_td + hj * (c_mean * a + other)) / (1.0 + hj * c_mean * half)
+        r = a - half * om_new
+        if r > hi or r < lo:
+            r = min(max(r, lo), hi)
+            om_new = om_td + hj * (c_mean * r + other)
+    return om_new, tm + c_end * (r - tm), r, tm + c_mean * (r - tm)
 
 
 @njit(cache=True, inline="always")
@@ -273,6 +321,20 @@ def _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t
      acc[A_DISSIPATED_AX]) = a
 
 
+@njit(cache=True, inline="always")
+def _load_drive(x, acc):
+    """The top drive's state and window integrals as the stepper's locals."""
+    return (x[X_OMEGA_TD], x[X_DRIVE_I], x[X_TM], x[X_TREF], acc[A_OMEGA_TD], acc[A_TM],
+            acc[A_WORK_MOTOR], acc[A_WORK_TOP_DRIVE])
+
+
+@njit(cache=True, inline="always")
+def _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd):
+    """The top drive's locals back into the state arrays (inverse of ``_load_drive``)."""
+    x[X_OMEGA_TD], x[X_DRIVE_I], x[X_TM], x[X_TREF] = om_td, integral, tm, ref
+    acc[A_OMEGA_TD], acc[A_TM], acc[A_WORK_MOTOR], acc[A_WORK_TOP_DRIVE] = a_otd, a_tm, a_wm, a_wtd
+
+
 @njit(cache=True)
 def _located_step(x, k, surf, p, c, acc, event):
     """One step taken in parts split where a law switches, from the state arrays and back.
@@ -287,12 +349,17 @@ def _located_step(x, k, surf, p, c, acc, event):
     """
     n, lam, beta, h, psi = p[P_N], p[P_LAM], p[P_BETA], p[P_H], p[P_PSI]
     inv_dth, dth = p[P_INV_DTHETA], p[P_DTHETA]
-    w0, om0, v_min = c[C_W0], c[C_OMEGA0], c[C_V_MIN]
+    w0, om0, v_min, t_cmd = c[C_W0], c[C_OMEGA0], c[C_V_MIN], c[C_T_CMD]
+    mode = np.int64(p[P_MODE])
+    drive = mode != MODE_KINEMATIC
+    j_td, t_max, t_min, rate, lag, kp, ki = (p[P_J], p[P_T_MAX], p[P_T_MIN], p[P_RATE],
+                                             p[P_LAG], p[P_KP], p[P_KI])
     n_nodes = surf.shape[0]
     mask = n_nodes - 1
     sector = n_nodes * dth
     (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t, k_last,
      regime, a_om_min, a_om_max, a) = _load(x, k, acc)
+    om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd = _load_drive(x, acc)
     hs = event * h
     left = h
     splits = 1
@@ -301,12 +368,26 @@ def _located_step(x, k, surf, p, c, acc, event):
         hpsi = hs * psi
         u_m = u + h2 * v
         phi_m = phi + h2 * om
-        ptd_m = ptd + h2 * om0
+        ptd_m = ptd + h2 * om_td
         ts = ptd_m - phi_m
+        om_td_new = om_td
+        om_td_bar = om_td
+        integral_m, tm_new, ref_new, t_bar = integral, tm, ref, tm
+        if drive:
+            c_end, c_mean = 1.0, 1.0
+            if lag > 0.0:
+                c_end = -math.expm1(-hs / lag)
+                c_mean = 1.0 - c_end * lag / hs
+            if mode == MODE_SPEED:
+                integral_m = integral + h2 * ki * (om0 - om_td)
+            om_td_new, tm_new, ref_new, t_bar = _drive_step(
+                mode, om_td, integral_m, tm, ref, ts, om0, t_cmd, rate * hs, hs / j_td, kp, t_min,
+                t_max, c_end, c_mean)
+            om_td_bar = 0.5 * (om_td + om_td_new)
         s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
         delta_new = u_m - s_m
         regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
-            delta_new, slope, regime, v, om, ts, w0, om0, n, lam, beta, hs, hpsi)
+            delta_new, slope, regime, v, om, ts, w0, om_td_bar, n, lam, beta, hs, hpsi)
         if splits < MAX_SPLITS and EVENT_MARGIN < event < 1.0 - EVENT_MARGIN:
             splits += 1
             hs *= event
@@ -337,7 +418,14 @@ def _located_step(x, k, surf, p, c, acc, event):
                         f_hoist)
         sum_w += w * (hs / h)
         sum_t += t * (hs / h)
-        u, v, phi, om, ptd = u_new, v_new, phi_new, om_new, ptd_m + h2 * om0
+        u, v, phi, om, ptd = u_new, v_new, phi_new, om_new, ptd_m + h2 * om_td_new
+        if drive:               # (A_OMEGA_TD: _steps books the top drive's turn)
+            a_tm += hs * t_bar
+            a_wm += hs * t_bar * om_td_bar
+            a_wtd += hs * ts * om_td_bar
+            if mode == MODE_SPEED:
+                integral = min(max(integral_m + h2 * ki * (om0 - om_td_new), t_min), t_max)
+            om_td, tm, ref = om_td_new, tm_new, ref_new
         tau += hs
         if om < a_om_min:
             a_om_min = om
@@ -350,9 +438,9 @@ def _located_step(x, k, surf, p, c, acc, event):
         hs = left
     _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
            sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
+    _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd)
 
 
-@njit(cache=True)
 def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     """Advance the state by ``n_steps`` fixed steps; return the next free row of ``out``.
 
@@ -361,7 +449,45 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     turn the bit forward by more than a sector 2 pi/n is refused: the rock surface cannot be
     swept (every node would be passed more than once) nor the depth of cut measured; the call
     stops before it, state as after the previous step, K_REFUSED = 1.
+
+    Two entry points share the loop ``_steps``, each compiled when first used and each calling
+    it with ``drive`` a constant (its one call site there, so the compiler inlines it and drops
+    the dead branch): ``advance_kinematic``, the seed's loop at the seed's speed, and
+    ``advance_drive``. This picks the one for the top drive's mode (a caller stepping often
+    keeps ``stepper(mode)`` instead).
     """
+    return stepper(int(p[P_MODE]))(x, k, surf, p, c, acc, n_steps, out, out_every, out_row)
+
+
+def stepper(mode: int):
+    """The compiled ``advance`` for the top drive's mode (MODE_*)."""
+    return advance_kinematic if mode == MODE_KINEMATIC else advance_drive
+
+
+@njit(cache=True)
+def advance_kinematic(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
+    """``advance`` with the ideal speed source; its drive integrals are booked around the loop
+    (its motor torque is the string's)."""
+    om0 = c[C_OMEGA0]
+    x[X_OMEGA_TD] = om0
+    ts0_sum, steps0 = acc[A_TS], k[K_STEPS]
+    out_row = _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, False)
+    acc[A_WORK_MOTOR] += om0 * (acc[A_TS] - ts0_sum)
+    acc[A_TM] += acc[A_TS] - ts0_sum
+    acc[A_OMEGA_TD] += (k[K_STEPS] - steps0) * p[P_H] * om0
+    return out_row
+
+
+@njit(cache=True)
+def advance_drive(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
+    """``advance`` with the top drive in the loop (speed or torque mode)."""
+    return _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, True)
+
+
+@njit(cache=True)
+def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
+    """``advance``'s loop; ``drive`` (a constant at each call): the top drive is in the loop
+    (speed or torque mode), not the ideal speed source."""
     n = p[P_N]
     lam = p[P_LAM]
     beta = p[P_BETA]
@@ -373,6 +499,13 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     w0 = c[C_W0]
     om0 = c[C_OMEGA0]
     v_min = c[C_V_MIN]
+    t_cmd = c[C_T_CMD]
+    mode = np.int64(p[P_MODE])
+    j_td, t_max, t_min, rate, kp, ki = (p[P_J], p[P_T_MAX], p[P_T_MIN], p[P_RATE], p[P_KP],
+                                        p[P_KI])
+    c_end, c_mean = p[P_LAG_END], p[P_LAG_MEAN]
+    rate_step = rate * h
+    hj = h / j_td
     n_nodes = surf.shape[0]
     mask = n_nodes - 1
     rows = out.shape[0]
@@ -381,6 +514,12 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
 
     (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t, k_last,
      regime, a_om_min, a_om_max, a) = _load(x, k, acc)
+    if drive:
+        om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd = _load_drive(x, acc)
+    else:                   # the ideal speed source (``advance`` books its drive integrals)
+        om_td = om0
+        integral = tm = ref = a_otd = a_tm = a_wm = a_wtd = 0.0
+    ptd0 = ptd
     steps, sampled = k[K_STEPS], k[K_SAMPLED]
     steps0 = steps
     ts0_sum, v0_sum = acc[A_TS], acc[A_V]
@@ -390,21 +529,36 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
         # 1. half drift
         u_m = u + h2 * v
         phi_m = phi + h2 * om
-        ptd_m = ptd + h2 * om0
+        ptd_m = ptd + h2 * om_td
         ts = ptd_m - phi_m
+        # the top drive under its motor torque against the string's (kinematic: omega0)
+        om_td_new = om_td
+        om_td_bar = om_td
+        integral_m, tm_new, ref_new, t_bar = integral, tm, ref, tm
+        if drive:
+            if mode == MODE_SPEED:
+                integral_m = integral + h2 * ki * (om0 - om_td)
+            om_td_new, tm_new, ref_new, t_bar = _drive_step(
+                mode, om_td, integral_m, tm, ref, ts, om0, t_cmd, rate_step, hj, kp, t_min, t_max,
+                c_end, c_mean)
+            om_td_bar = 0.5 * (om_td + om_td_new)
         # 2. depth of cut on the surface left by earlier passes
         s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
         delta_new = u_m - s_m
         # 3. set-valued laws, solved for the end-of-step velocities
         regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
-            delta_new, slope, regime, v, om, ts, w0, om0, n, lam, beta, h, hpsi)
+            delta_new, slope, regime, v, om, ts, w0, om_td_bar, n, lam, beta, h, hpsi)
         if EVENT_MARGIN < event < 1.0 - EVENT_MARGIN:
             # a law switches inside the step: take it in parts (rare)
             _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta,
                    g, sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
+            if drive:   # (kinematic mode: the parts leave the drive's state as it is)
+                _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd)
             _located_step(x, k, surf, p, c, acc, event)
             (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t,
              k_last, regime, a_om_min, a_om_max, a) = _load(x, k, acc)
+            if drive:
+                om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd = _load_drive(x, acc)
             if k[K_REFUSED]:
                 break
         else:
@@ -443,7 +597,16 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             v = v_new
             phi = phi_new
             om = om_new
-            ptd = ptd_m + h2 * om0
+            ptd = ptd_m + h2 * om_td_new
+            if drive:
+                a_tm += h * t_bar
+                a_wm += h * t_bar * om_td_bar
+                a_wtd += h * ts * om_td_bar
+                if mode == MODE_SPEED:      # the integral term, held within the torque limits
+                    integral = min(max(integral_m + h2 * ki * (om0 - om_td_new), t_min), t_max)
+                om_td = om_td_new
+                tm = tm_new
+                ref = ref_new
             tau += h
             if om < a_om_min:
                 a_om_min = om
@@ -469,6 +632,8 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
             out[out_row, O_W0] = w0
             out[out_row, O_OMEGA0] = om0
             out[out_row, O_G] = g
+            out[out_row, O_OMEGA_TD] = om_td
+            out[out_row, O_TM] = tm if drive else ptd - phi
             out_row += 1
             a_w += h * sum_w
             a_t += h * sum_t
@@ -478,11 +643,15 @@ def advance(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
 
     _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
            sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)
+    if drive:
+        a_otd += ptd - ptd0     # the integral of omega_td: the top drive's turn, exactly
+        _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd)
     k[K_STEPS], k[K_SAMPLED] = steps, sampled
     acc[A_W], acc[A_T] = a_w, a_t
     # integrals of the commands times a state: the commands are held over the call
     acc[A_TIME] += (steps - steps0) * h
-    acc[A_WORK_TOP_DRIVE] += om0 * (acc[A_TS] - ts0_sum)
+    if not drive:           # the ideal speed source: its torque is the string's
+        acc[A_WORK_TOP_DRIVE] += om0 * (acc[A_TS] - ts0_sum)
     acc[A_WORK_WEIGHT] += w0 * (acc[A_V] - v0_sum)
     acc[A_W0] += (steps - steps0) * h * w0
     acc[A_OMEGA0] += (steps - steps0) * h * om0

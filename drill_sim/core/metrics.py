@@ -32,19 +32,24 @@ class Metrics:
     mean_surface_torque: float
     mean_rop: float
     mean_w0: float
-    mean_omega0: float
-    work_top_drive: float          # [C] (torque scale times rad)
+    mean_omega0: float             # the speed command (the set-point in speed mode)
+    work_top_drive: float          # [C] (torque scale times rad), the string's torque at the top
     dissipated_rotation: float     # [C]
     work_weight: float             # [F* L*]
     work_hoist: float              # [F* L*]
     dissipated_axial: float        # [F* L*]
+    # the top drive (kinematic mode: mean_omega0, the string's torque, work_top_drive); NaN
+    # when built without them
+    mean_top_drive_speed: float = math.nan
+    mean_motor_torque: float = math.nan    # [C]
+    work_motor: float = math.nan           # [C]
 
     @classmethod
     def from_accumulators(cls, acc: np.ndarray) -> Metrics:
         time = acc[kn.A_TIME]
         if time <= 0.0:
             nan = math.nan
-            return cls(0.0, *([nan] * 17))
+            return cls(0.0, *([nan] * 20))
         mean_omega = acc[kn.A_OMEGA] / time
         spread = acc[kn.A_OMEGA_MAX] - acc[kn.A_OMEGA_MIN]
         return cls(
@@ -66,6 +71,9 @@ class Metrics:
             work_weight=acc[kn.A_WORK_WEIGHT],
             work_hoist=acc[kn.A_WORK_HOIST],
             dissipated_axial=acc[kn.A_DISSIPATED_AX],
+            mean_top_drive_speed=acc[kn.A_OMEGA_TD] / time,
+            mean_motor_torque=acc[kn.A_TM] / time,
+            work_motor=acc[kn.A_WORK_MOTOR],
         )
 
     def as_dict(self) -> dict[str, float]:
@@ -88,10 +96,13 @@ class Metrics:
             "mean_surface_torque_nm": self.mean_surface_torque * c,
             "mean_rop_m_s": self.mean_rop * scales.velocity_m_s,
             "mean_available_weight_n": self.mean_w0 * f,
-            "mean_top_drive_speed_rad_s": self.mean_omega0 * w_rate,
+            "mean_top_drive_speed_rad_s": self.mean_top_drive_speed * w_rate,
+            "mean_top_drive_speed_setpoint_rad_s": self.mean_omega0 * w_rate,
+            "mean_motor_torque_nm": self.mean_motor_torque * c,
             "work_top_drive_j": self.work_top_drive * c,
             "dissipated_rotation_j": self.dissipated_rotation * c,
             "work_weight_j": self.work_weight * f * length,
             "work_hoist_j": self.work_hoist * f * length,
             "dissipated_axial_j": self.dissipated_axial * f * length,
+            "work_motor_j": self.work_motor * c,
         }

@@ -219,6 +219,13 @@ class StringGeometry:
     def _area(od: float, inner: float) -> float:
         return math.pi / 4.0 * (od**2 - inner**2)
 
+    @property
+    def torsional_impedance_nm_s_rad(self) -> float:
+        """The pipe's torsional impedance Z = J_pipe sqrt(G rho) [N m s/rad] (model contract,
+        section 9): the torque per unit speed a torsional wave carries along it."""
+        j_pipe = self._polar_moment(self.pipe_od_m, self.pipe_id_m)
+        return j_pipe * math.sqrt(self.shear_modulus_pa * self.steel_density_kg_m3)
+
     def lumped(self) -> dict[str, float]:
         """C [N m/rad], I [kg m^2], M [kg] and W_s [N] of this string."""
         j_pipe = self._polar_moment(self.pipe_od_m, self.pipe_id_m)

@@ -2,7 +2,9 @@
 
 A preset file has a ``bit`` section (bit and rock, SI), either a ``string`` section (pipe and
 collar geometry, from which C, I, M and W_s are computed) or a ``lumped`` section (those four
-directly), and optional default ``commands`` (``top_drive_speed_rpm``, ``weight_on_bit_kn``).
+directly), optional default ``commands`` (``top_drive_speed_rpm``, ``weight_on_bit_kn``) and an
+optional ``top_drive`` section (``TopDriveParameters``' fields; the drive's proportional gain
+defaults to 50 Z, Z the pipe's torsional impedance, when the string's geometry is given).
 An optional ``string_model: lumped | distributed`` (default lumped) picks the string's model;
 ``distributed`` needs the ``string`` geometry.
 """
@@ -10,12 +12,13 @@ An optional ``string_model: lumped | distributed`` (default lumped) picks the st
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from .distributed import check_string_model
 from .parameters import ParameterError, RigParameters, StringGeometry, check_number
 from .resources import read_yaml, shipped_names
+from .top_drive import KP_PER_IMPEDANCE, TopDriveParameters
 
 _BIT_KEYS = ("bit_radius_m", "blade_count", "intrinsic_specific_energy_pa", "cutting_inclination",
              "contact_stress_pa", "wear_flat_length_m", "friction_coefficient",
@@ -34,6 +37,7 @@ class Preset:
     string: StringGeometry | None
     top_drive_speed_rpm: float
     weight_on_bit_kn: float
+    top_drive: TopDriveParameters = field(default_factory=TopDriveParameters)
     string_model: str = "lumped"      # "lumped" or "distributed" (needs ``string``)
 
     @property
@@ -72,10 +76,16 @@ def preset_from_dict(name: str, data: object) -> Preset:
         lumped = _section(name, data, "lumped", _LUMPED_KEYS, required=True)
     commands = _section(name, data, "commands", ("top_drive_speed_rpm", "weight_on_bit_kn"),
                         required=False, need=())
-    unknown = set(data) - {"description", "bit", "string", "lumped", "commands", "string_model"}
+    drive = _section(name, data, "top_drive", tuple(f.name for f in fields(TopDriveParameters)),
+                     required=False, need=())
+    if string is not None and drive.get("drive_kp_nm_s_rad") is None:
+        drive["drive_kp_nm_s_rad"] = KP_PER_IMPEDANCE * string.torsional_impedance_nm_s_rad
+    unknown = set(data) - {"description", "bit", "string", "lumped", "commands", "top_drive",
+                           "string_model"}
     if unknown:
         raise ParameterError(f"preset {name!r}: unknown section(s) {sorted(unknown)}; expected "
-                             "description, bit, string or lumped, commands, string_model")
+                             "description, bit, string or lumped, commands, top_drive, "
+                             "string_model")
     string_model = _string_model(name, data.get("string_model", "lumped"), string)
     return Preset(
         name=name,
@@ -86,6 +96,7 @@ def preset_from_dict(name: str, data: object) -> Preset:
                                          commands.get("top_drive_speed_rpm", 60.0)),
         weight_on_bit_kn=check_number("weight_on_bit_kn", commands.get("weight_on_bit_kn", 100.0),
                                       low_inclusive=True),
+        top_drive=TopDriveParameters(**drive),
         string_model=string_model,
     )
 

@@ -7,6 +7,7 @@ and the recorder never see a dimensionless number.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import NamedTuple
 
 from . import kernel as kn
@@ -15,6 +16,7 @@ from .distributed_simulator import StringSimulator
 from .parameters import ParameterError, RigParameters, StringGeometry, check_number
 from .simulator import DEFAULT_DT, STEPS_PER_PERIOD, Simulator, fastest_period, max_step
 from .stability import SteadyState, steady_state
+from .top_drive import DriveGroups, TopDriveParameters
 
 RPM = 2.0 * math.pi / 60.0   # rad/s per rpm
 
@@ -43,22 +45,27 @@ class RigSample(NamedTuple):
     hole_depth_m: float            # deepest point of the hole below the bit's start
     bit_angle_rad: float
     top_drive_angle_rad: float
-    top_drive_speed_rad_s: float   # commanded
+    top_drive_speed_rad_s: float   # the top drive's (kinematic mode: the command)
     hook_load_n: float             # commanded
     stuck: bool
     off_bottom: bool
     stick_slip: bool               # a stick phase within the stick-slip window
     regime: int                    # the kernel's regime of the last step: REGIME_* below
+    top_drive_speed_setpoint_rad_s: float  # the speed command (unused in torque mode)
+    motor_torque_nm: float         # applied, after limits and lag (kinematic mode: the string
+                                   # torque, the torque that holds the commanded speed)
 
 
-def _check_step(dt_s: float, params: RigParameters) -> None:
+def _check_step(dt_s: float, params: RigParameters, top_drive: TopDriveParameters) -> None:
     """Refuse a step that cannot resolve the fastest mode of these parameters, in SI."""
-    limit_s = max_step(params.groups) * params.scales.time_s
+    drive = top_drive.groups(params.scales, params.bha_inertia_kg_m2)
+    limit_s = max_step(params.groups, drive) * params.scales.time_s
     if dt_s > limit_s * (1.0 + 1e-12):
+        period_s = fastest_period(params.groups, drive) * params.scales.time_s
         raise ParameterError(
             f"dt_s = {dt_s:g} s cannot resolve the fastest mode of these parameters (period "
-            f"{fastest_period(params.groups) * params.scales.time_s:.4g} s): expected dt_s <= "
-            f"{limit_s:.4g} s, {STEPS_PER_PERIOD} steps a period")
+            f"{period_s:.4g} s): expected dt_s <= {limit_s:.4g} s, {STEPS_PER_PERIOD} steps a "
+            "period")
 
 
 class Rig:
@@ -66,23 +73,28 @@ class Rig:
 
     dt_s: fixed step [s] (default DEFAULT_DT t*); stick_window_s: how long the stick-slip flag
     stays up after a stick [s] (default two torsional periods, 4 pi t*); hoist_speed_limit_m_s:
-    the string rises no faster (default unlimited). string_model: ``lumped`` (default) or
-    ``distributed`` (a ``StringSimulator`` of ``geometry``, the preset's ``string``, at the same
-    step; the SI face is the same, but ``replace_parameters`` is refused).
+    the string rises no faster (default unlimited); top_drive: the drive (default kinematic,
+    the seed's ideal speed source; ``set_top_drive`` changes it at run time). string_model:
+    ``lumped`` (default) or ``distributed`` (a ``StringSimulator`` of ``geometry``, the
+    preset's ``string``, at the same step, with the kinematic top drive; the SI face is the
+    same, but ``replace_parameters`` is refused).
     """
 
     def __init__(self, params: RigParameters, dt_s: float | None = None, *,
                  stick_window_s: float | None = None,
-                 hoist_speed_limit_m_s: float = math.inf, string_model: str = "lumped",
+                 hoist_speed_limit_m_s: float = math.inf,
+                 top_drive: TopDriveParameters | None = None, string_model: str = "lumped",
                  geometry: StringGeometry | None = None) -> None:
         self.params = params
         self.string_model = check_string_model(string_model)
         self.scales = params.scales
         self.groups = params.groups
+        self.top_drive = TopDriveParameters() if top_drive is None else top_drive
         ts = self.scales.time_s
         dt = DEFAULT_DT if dt_s is None else check_number("dt_s", dt_s) / ts
-        _check_step(dt * ts, params)
+        _check_step(dt * ts, params, self.top_drive)
         self.sim = self._simulator(dt, geometry)
+        self._torque_nm = 0.0
         self.set_stick_window(4.0 * math.pi * ts if stick_window_s is None else stick_window_s)
         self.set_hoist_speed_limit(hoist_speed_limit_m_s)
         self._hook_load_n = params.submerged_weight_n
@@ -92,7 +104,11 @@ class Rig:
     def _simulator(self, dt: float, geometry: StringGeometry | None) -> Simulator:
         """The lumped ``Simulator`` or, for the distributed model, a ``StringSimulator``."""
         if self.string_model == "lumped":
-            return Simulator(self.groups, dt)
+            return Simulator(self.groups, dt, drive=self._drive_groups(self.params, self.top_drive))
+        if self.top_drive.top_drive_mode != "kinematic":
+            raise ParameterError("string_model = 'distributed' runs with the kinematic top drive "
+                                 f"only (top_drive_mode = {self.top_drive.top_drive_mode!r}); "
+                                 "expected top_drive_mode = 'kinematic' or the lumped string")
         if geometry is None:
             raise ParameterError("string_model = 'distributed' needs geometry: the preset's "
                                  "string (a StringGeometry); a preset with 'lumped' has none")
@@ -108,6 +124,23 @@ class Rig:
 
     def omega0_of(self, speed_rad_s: float) -> float:
         return speed_rad_s * self.scales.time_s
+
+    @staticmethod
+    def _drive_groups(params: RigParameters, top_drive: TopDriveParameters) -> DriveGroups:
+        return top_drive.groups(params.scales, params.bha_inertia_kg_m2)
+
+    def set_top_drive(self, top_drive: TopDriveParameters) -> None:
+        """Change the top drive at run time (mode, inertia, limits, rate limit, lag, gains), the
+        state kept; a change of mode is bumpless (``Simulator.set_drive``). Refused, nothing
+        changed, if the step cannot resolve it."""
+        _check_step(self.dt_s, self.params, top_drive)
+        self.sim.set_drive(self._drive_groups(self.params, top_drive))
+        self.top_drive = top_drive
+        self._torque_nm = self.sim.motor_torque_command * self.scales.stiffness_nm_per_rad
+
+    def set_top_drive_mode(self, mode: str) -> None:
+        """``kinematic``, ``speed`` or ``torque``, the drive's other settings kept."""
+        self.set_top_drive(replace(self.top_drive, top_drive_mode=mode))
 
     def set_hoist_speed_limit(self, limit_m_s: float) -> None:
         """The string rises no faster than this [m/s]; math.inf for no limit."""
@@ -133,14 +166,16 @@ class Rig:
             raise ParameterError("replace_parameters: not available with string_model = "
                                  "'distributed' (its state is the pipe's wave buffers, which "
                                  "cannot be carried to new parameters); make a new Rig")
-        _check_step(self.dt_s, params)
+        _check_step(self.dt_s, params, self.top_drive)
         old, new = self.scales, params.scales
         s = self.sim.state()
         sum_w, sum_t, n = self.sim.take_force_sums()     # carried over in SI to the next sample
         self._pending = (self._pending[0] + sum_w * old.force_n,
                          self._pending[1] + sum_t * old.stiffness_nm_per_rad, self._pending[2] + n)
-        sim = Simulator(params.groups, self.dt_s / new.time_s)
+        sim = Simulator(params.groups, self.dt_s / new.time_s,
+                        drive=self._drive_groups(params, self.top_drive))
         length = old.length_m / new.length_m
+        torque = old.stiffness_nm_per_rad / new.stiffness_nm_per_rad
         sim.load_state(tau=s.tau * old.time_s / new.time_s, steps=self.sim.steps,
                        u=s.u * length, v=s.v * old.velocity_m_s / new.velocity_m_s, phi=s.phi,
                        omega=s.omega * new.time_s / old.time_s, phi_td=s.phi_td,
@@ -148,12 +183,16 @@ class Rig:
                        surface_behind=self.sim.surface_behind * length, regime=s.regime,
                        since_stick=s.since_stick * old.time_s / new.time_s,
                        w=s.w * old.force_n / new.force_n,
-                       t=s.t * old.stiffness_nm_per_rad / new.stiffness_nm_per_rad,
-                       delta_n=s.delta_n * length, g=s.g)
+                       t=s.t * torque, delta_n=s.delta_n * length, g=s.g,
+                       omega_td=s.omega_td * new.time_s / old.time_s,
+                       motor_torque=s.motor_torque * torque,
+                       drive_integral=s.drive_integral * torque,
+                       drive_reference=s.drive_reference * torque)
         self.params, self.scales, self.groups, self.sim = params, new, params.groups, sim
         self.set_stick_window(self.stick_window_s)
         self.set_hoist_speed_limit(self.hoist_speed_limit_m_s)
         self.command(self._speed_rad_s, self._hook_load_n)
+        self.command_motor_torque(self._torque_nm)
 
     # ---- commands and initial states ----------------------------------------------------
     def command(self, top_drive_speed_rad_s: float, hook_load_n: float) -> None:
@@ -162,6 +201,17 @@ class Rig:
         hook = check_number("hook_load_n", hook_load_n, low_inclusive=True)
         self.sim.set_commands(self.w0_of(hook), self.omega0_of(speed))
         self._speed_rad_s, self._hook_load_n = speed, hook
+
+    def command_motor_torque(self, torque_nm: float) -> None:
+        """Hold this motor torque command from now on [N m] (torque mode; the drive's limits,
+        rate limit and lag act on it)."""
+        torque_nm = check_number("motor_torque_nm", torque_nm, low=None)
+        self.sim.set_motor_torque(torque_nm / self.scales.stiffness_nm_per_rad)
+        self._torque_nm = torque_nm
+
+    @property
+    def commanded_motor_torque_nm(self) -> float:
+        return self._torque_nm
 
     @property
     def commanded_speed_rad_s(self) -> float:
@@ -173,13 +223,19 @@ class Rig:
 
     def start_steady(self, top_drive_speed_rad_s: float, hook_load_n: float,
                      perturbation: float = 0.0) -> None:
-        """Start exactly on steady drilling at these commands (bit speed times 1 + perturbation).
+        """Start exactly on steady drilling at these commands (bit speed times 1 + perturbation);
+        a top drive in the loop turns at that speed under the steady torque (torque mode: the
+        motor torque command becomes it).
 
-        Raises NoSteadyDrilling, changing nothing, when the weight cannot beat friction."""
+        Raises NoSteadyDrilling, changing nothing, when the weight cannot beat friction, and
+        ParameterError when the drive's limits cannot supply the steady torque."""
         self.steady_state(top_drive_speed_rad_s, hook_load_n)
-        self.command(top_drive_speed_rad_s, hook_load_n)
+        check_number("top_drive_speed_rad_s", top_drive_speed_rad_s, low_inclusive=True)
+        check_number("hook_load_n", hook_load_n, low_inclusive=True)
         self.sim.start_steady(self.w0_of(hook_load_n), self.omega0_of(top_drive_speed_rad_s),
                               perturbation)
+        self.command(top_drive_speed_rad_s, hook_load_n)
+        self._torque_nm = self.sim.motor_torque_command * self.scales.stiffness_nm_per_rad
         self._forget_samples()
 
     def start_at_rest(self, gap_m: float = 0.0) -> None:
@@ -187,6 +243,7 @@ class Rig:
         self.sim.start_at_rest(check_number("gap_m", gap_m, low_inclusive=True)
                                / self.scales.length_m)
         self.command(0.0, self.params.submerged_weight_n)
+        self._torque_nm = 0.0
         self._forget_samples()
 
     def steady_state(self, top_drive_speed_rad_s: float, hook_load_n: float) -> SteadyState:
@@ -264,6 +321,7 @@ class Rig:
         x, regime = self.sim.live_state, self.sim.regime
         sc = self.scales
         c = sc.stiffness_nm_per_rad
+        kinematic = self.sim.drive.mode == "kinematic"
         return RigSample(
             time_s=self.time_s,
             bit_speed_rad_s=float(x[kn.X_OMEGA]) / sc.time_s,
@@ -276,12 +334,15 @@ class Rig:
             hole_depth_m=max(0.0, self.sim.hole_bottom) * sc.length_m,
             bit_angle_rad=float(x[kn.X_PHI]),
             top_drive_angle_rad=float(x[kn.X_PHI_TD]),
-            top_drive_speed_rad_s=self._speed_rad_s,
+            top_drive_speed_rad_s=self._speed_rad_s if kinematic
+            else float(x[kn.X_OMEGA_TD]) / sc.time_s,
             hook_load_n=self._hook_load_n,
             stuck=bool(regime == kn.REGIME_STUCK),
             off_bottom=bool(regime == kn.REGIME_OFF_BOTTOM),
             stick_slip=self.sim.stick_slip,
             regime=regime,
+            top_drive_speed_setpoint_rad_s=self._speed_rad_s,
+            motor_torque_nm=float(x[kn.X_TS if kinematic else kn.X_TM]) * c,
         )
 
     def metrics(self) -> dict[str, float]:

@@ -14,7 +14,7 @@ import numpy as np
 from .parameters import Scales
 
 if TYPE_CHECKING:
-    from .simulator import Trajectory
+    from .trajectory import Trajectory
 
 
 @dataclass(frozen=True)
@@ -31,10 +31,12 @@ class SITrajectory:
     depth_of_cut_m: np.ndarray         # per revolution, d = n d_n (negative off bottom)
     bit_depth_m: np.ndarray            # bit position below its start
     bit_angle_rad: np.ndarray
-    top_drive_speed_rad_s: np.ndarray  # commanded
+    top_drive_speed_rad_s: np.ndarray  # the top drive's (kinematic mode: the command)
     available_weight_n: np.ndarray     # commanded, W0 = W_s - H0
     stuck: np.ndarray                  # bool
     off_bottom: np.ndarray             # bool
+    top_drive_speed_setpoint_rad_s: np.ndarray  # the speed command
+    motor_torque_nm: np.ndarray        # applied (kinematic mode: the string torque)
 
     @classmethod
     def of(cls, tr: Trajectory, scales: Scales, blade_count: int) -> SITrajectory:
@@ -46,6 +48,8 @@ class SITrajectory:
                    tob_nm=tr.t * c, surface_torque_nm=tr.ts * c,
                    depth_of_cut_m=tr.delta_n * blade_count * scales.length_m,
                    bit_depth_m=tr.u * scales.length_m, bit_angle_rad=tr.phi.copy(),
-                   top_drive_speed_rad_s=tr.omega0 / scales.time_s,
+                   top_drive_speed_rad_s=tr.omega_td / scales.time_s,
                    available_weight_n=tr.w0 * scales.force_n, stuck=tr.stuck.copy(),
-                   off_bottom=tr.off_bottom.copy())
+                   off_bottom=tr.off_bottom.copy(),
+                   top_drive_speed_setpoint_rad_s=tr.omega0 / scales.time_s,
+                   motor_torque_nm=tr.motor_torque * c)

@@ -10,15 +10,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
 from . import kernel as kn
 from .metrics import Metrics
-from .parameters import Groups, ParameterError, Scales, check_number
-from .si_trajectory import SITrajectory
+from .parameters import Groups, ParameterError, check_number
 from .stability import steady_state
+from .top_drive import DriveGroups
+from .trajectory import StateView, Trajectory
 
 DEFAULT_DT = 5e-4            # [t*]; halving it moves stationary metrics ~2e-5 (test_validation)
 MAX_NODES = 2**22            # surface memory cap: 32 MiB
@@ -27,13 +27,16 @@ MAX_NODES = 2**22            # surface memory cap: 32 MiB
 STEPS_PER_PERIOD = 20       # the fastest mode's period holds at least this many steps
 
 
-def fastest_period(groups: Groups) -> float:
+def fastest_period(groups: Groups, drive: DriveGroups | None = None) -> float:
     """Period [t*] of the fastest mode: axial in contact, 2 pi/sqrt(n psi) (the cutting law's
-    stiffness n against the axial inertia), or torsional, 2 pi, whichever is shorter."""
-    return 2.0 * math.pi / math.sqrt(max(groups.n * groups.psi, 1.0))
+    stiffness n against the axial inertia), or torsional, 2 pi (with a top drive in the loop,
+    2 pi/sqrt(1 + 1/j) or the speed PI's, ``DriveGroups.fastest_frequency``), whichever is
+    shorter."""
+    torsional = 1.0 if drive is None else drive.fastest_frequency()
+    return 2.0 * math.pi / math.sqrt(max(groups.n * groups.psi, torsional**2))
 
 
-def max_step(groups: Groups) -> float:
+def max_step(groups: Groups, drive: DriveGroups | None = None) -> float:
     """The largest step [t*] that resolves the fastest mode: its period / STEPS_PER_PERIOD.
 
     The midpoint scheme's phase error on an oscillation of frequency f is (h f)^2/24 per
@@ -41,7 +44,7 @@ def max_step(groups: Groups) -> float:
     contact events of the bit, which last a fraction of the axial period, are still seen by a
     few steps. A step of a period or more lets the stick law hold the bit for good (psi = 1e4,
     dt = 0.05: stick fraction 1.0 where a resolving step gives none)."""
-    return min(0.05, fastest_period(groups) / STEPS_PER_PERIOD)
+    return min(0.05, fastest_period(groups, drive) / STEPS_PER_PERIOD)
 
 
 def surface_nodes(groups: Groups, dt: float) -> int:
@@ -53,112 +56,59 @@ def surface_nodes(groups: Groups, dt: float) -> int:
     return int(min(MAX_NODES, max(64, 2 ** math.ceil(math.log2(wanted)))))
 
 
-@dataclass(frozen=True)
-class StateView:
-    """A copy of the instantaneous state, dimensionless, with the model contract's names."""
-
-    tau: float
-    u: float
-    v: float
-    phi: float
-    omega: float
-    phi_td: float
-    w: float          # weight on bit over the last step (stick reaction included)
-    t: float          # torque on bit over the last step (a stick's reaction included)
-    ts: float         # string (surface) torque phi_td - phi
-    delta_n: float    # depth of cut per blade
-    g: float          # wear-flat contact factor
-    regime: int       # kernel.REGIME_*
-    since_stick: float
-
-    @property
-    def stuck(self) -> bool:
-        return self.regime == kn.REGIME_STUCK
-
-    @property
-    def off_bottom(self) -> bool:
-        return self.regime == kn.REGIME_OFF_BOTTOM
-
-
-@dataclass(frozen=True)
-class Trajectory:
-    """Sampled outputs of a run (dimensionless), one array per quantity of the model contract.
-
-    w and t are means over each row's output interval (impulses of sticks and landings spread
-    over the interval, as a sensor would see them); everything else is the value at the row.
-    """
-
-    tau: np.ndarray
-    u: np.ndarray
-    v: np.ndarray
-    phi: np.ndarray
-    omega: np.ndarray
-    w: np.ndarray
-    t: np.ndarray
-    ts: np.ndarray
-    delta_n: np.ndarray
-    stuck: np.ndarray
-    off_bottom: np.ndarray
-    w0: np.ndarray
-    omega0: np.ndarray
-    metrics: Metrics
-
-    @classmethod
-    def from_rows(cls, rows: np.ndarray, metrics: Metrics) -> Trajectory:
-        return cls(tau=rows[:, kn.O_TAU].copy(), u=rows[:, kn.O_U].copy(),
-                   v=rows[:, kn.O_V].copy(), phi=rows[:, kn.O_PHI].copy(),
-                   omega=rows[:, kn.O_OMEGA].copy(), w=rows[:, kn.O_W].copy(),
-                   t=rows[:, kn.O_T].copy(), ts=rows[:, kn.O_TS].copy(),
-                   delta_n=rows[:, kn.O_DELTA].copy(),
-                   stuck=rows[:, kn.O_REGIME] == kn.REGIME_STUCK,
-                   off_bottom=rows[:, kn.O_REGIME] == kn.REGIME_OFF_BOTTOM,
-                   w0=rows[:, kn.O_W0].copy(), omega0=rows[:, kn.O_OMEGA0].copy(),
-                   metrics=metrics)
-
-    def to_si(self, scales: Scales, blade_count: int) -> SITrajectory:
-        """The same samples in SI, units in the field names (depth of cut per revolution)."""
-        return SITrajectory.of(self, scales, blade_count)
-
-
 class Simulator:
     """Fixed-step integration of the RGD model in dimensionless form.
 
     dt: step [t*]. stick_window: how long the stick-slip flag stays up after a stick [t*];
     default two torsional periods (4 pi). hoist_speed_limit: the string rises no faster [L*/t*].
+    drive: the top drive (default kinematic: the seed's ideal speed source).
     """
 
     def __init__(self, groups: Groups, dt: float = DEFAULT_DT, *, stick_window: float = 4 * math.pi,
-                 hoist_speed_limit: float = math.inf, nodes: int | None = None) -> None:
+                 hoist_speed_limit: float = math.inf, nodes: int | None = None,
+                 drive: DriveGroups | None = None) -> None:
         self.groups = groups
         self.dt = check_number("dt", dt, high=0.05)
-        if self.dt > max_step(groups) * (1.0 + 1e-12):
-            raise ParameterError(
-                f"dt = {self.dt:g} t* cannot resolve the fastest mode: its period is "
-                f"{fastest_period(groups):.4g} t* (axial 2 pi/sqrt(n psi) with n psi = "
-                f"{groups.n * groups.psi:g}; torsional 2 pi); expected dt <= "
-                f"{max_step(groups):.4g} t*, {STEPS_PER_PERIOD} steps a period")
+        drive = DriveGroups() if drive is None else drive
+        self._check_step(drive)
         self.stick_window = check_number("stick_window", stick_window)
         nodes = surface_nodes(groups, self.dt) if nodes is None else int(nodes)
         if nodes < 4 or nodes & (nodes - 1) or nodes > MAX_NODES:
             raise ParameterError(f"nodes = {nodes} is out of range: expected a power of two "
                                  f"4..{MAX_NODES}")
         dtheta = 2.0 * math.pi / groups.n / nodes
-        self._p = np.array([groups.n, groups.psi, groups.lam, groups.beta, self.dt, dtheta,
-                            1.0 / dtheta], dtype=np.float64)
+        self._p = np.zeros(kn.NP)
+        self._p[:kn.P_MODE] = (groups.n, groups.psi, groups.lam, groups.beta, self.dt, dtheta,
+                               1.0 / dtheta)
         self._x = np.zeros(kn.NX)
         self._k = np.zeros(kn.NK, dtype=np.int64)
         self._surf = np.zeros(nodes)
         self._c = np.zeros(kn.NC)
         self._acc = np.zeros(kn.NA)
         self._no_rows = np.zeros((0, kn.NO))
+        self.drive = drive
+        self._write_drive(drive)
         self.set_hoist_speed_limit(hoist_speed_limit)
         self.start_at_rest()
+
+    def _check_step(self, drive: DriveGroups) -> None:
+        if self.dt > max_step(self.groups, drive) * (1.0 + 1e-12):
+            g = self.groups
+            raise ParameterError(
+                f"dt = {self.dt:g} t* cannot resolve the fastest mode: its period is "
+                f"{fastest_period(g, drive):.4g} t* (axial 2 pi/sqrt(n psi) with n psi = "
+                f"{g.n * g.psi:g}; torsional 2 pi/{drive.fastest_frequency():.4g}); expected "
+                f"dt <= {max_step(g, drive):.4g} t*, {STEPS_PER_PERIOD} steps a period")
 
     # ---- initial conditions -------------------------------------------------------------
     def start_steady(self, w0: float, omega0: float, perturbation: float = 0.0) -> None:
         """The exact steady start (model contract, section 4); omega scaled by 1 + perturbation."""
         perturbation = check_number("perturbation", perturbation, low=-1.0)
         st = steady_state(self.groups, w0, omega0)
+        d = self.drive
+        if d.mode != "kinematic" and not d.t_min <= st.t0 <= d.t_max:
+            raise ParameterError(f"steady drilling needs a motor torque of {st.t0:.4g} C, outside "
+                                 f"the drive's limits [{d.t_min:.4g}, {d.t_max:.4g}] C")
         self.set_commands(w0, omega0)
         nodes = self._surf.size
         dtheta = self._p[kn.P_DTHETA]
@@ -175,6 +125,10 @@ class Simulator:
         self._x[kn.X_T] = self._x[kn.X_TS] = st.t0
         self._x[kn.X_DELTA] = st.delta_n0
         self._x[kn.X_G] = 1.0
+        x = self._x      # the drive turns at omega0 under the steady torque; the PI's error is 0
+        x[kn.X_OMEGA_TD] = omega0
+        x[kn.X_TM] = x[kn.X_TREF] = x[kn.X_DRIVE_I] = st.t0
+        self._c[kn.C_T_CMD] = st.t0
         self._k[:] = (0, kn.REGIME_ROTATING, 0, 0, 0)
         self.reset_window()
 
@@ -182,6 +136,7 @@ class Simulator:
         """Bit at rest ``gap`` [L*] above a flat bottom, string relaxed, commands zero."""
         gap = check_number("gap", gap, low_inclusive=True)
         self.set_commands(0.0, 0.0)
+        self._c[kn.C_T_CMD] = 0.0
         self._surf[:] = 0.0
         self._x[:] = 0.0
         self._x[kn.X_U] = -gap
@@ -192,7 +147,9 @@ class Simulator:
     def load_state(self, *, tau: float, steps: int, u: float, v: float, phi: float, omega: float,
                    phi_td: float, surface: np.ndarray, regime: int, since_stick: float,
                    w: float = 0.0, t: float = 0.0, delta_n: float = 0.0, g: float = 0.0,
-                   surface_behind: float | None = None) -> None:
+                   surface_behind: float | None = None, omega_td: float | None = None,
+                   motor_torque: float | None = None, drive_integral: float | None = None,
+                   drive_reference: float | None = None) -> None:
         """Put the bit, string and rock in a given state (dimensionless).
 
         ``surface`` is S over one sector at any even spacing (node 0 at the sector's start), as
@@ -202,6 +159,9 @@ class Simulator:
         ``surface_behind`` (as ``surface_behind`` reads it; None: the given value, i.e. that
         node was not cut by the current pass). w, t, delta_n and g are what the last step's
         outputs read until the next step; the force sums of the next sample start from here.
+        The top drive: its speed (None: the speed command), motor torque (None: the string's,
+        phi_td - phi), the PI's integral term and the limited reference (None: the motor
+        torque); kinematic mode keeps the top drive at the speed command whatever is given.
         """
         values = np.array([tau, u, v, phi, omega, phi_td, since_stick], dtype=float)
         if not np.all(np.isfinite(values[:6])) or not np.all(np.isfinite(surface)):
@@ -226,6 +186,12 @@ class Simulator:
         x[kn.X_W], x[kn.X_T], x[kn.X_DELTA], x[kn.X_G] = w, t, delta_n, g
         x[kn.X_S_BEHIND] = float(np.interp(x_dst[k_node], x_src, np.append(before, before[0])))
         x[kn.X_SUM_W] = x[kn.X_SUM_T] = 0.0
+        tm = phi_td - phi if motor_torque is None else motor_torque
+        x[kn.X_OMEGA_TD] = self._c[kn.C_OMEGA0] if omega_td is None or \
+            self.drive.mode == "kinematic" else omega_td
+        x[kn.X_TM] = tm
+        x[kn.X_DRIVE_I] = tm if drive_integral is None else drive_integral
+        x[kn.X_TREF] = tm if drive_reference is None else drive_reference
         self._k[:] = (k_last, regime, steps, steps, 0)
 
     # ---- commands -----------------------------------------------------------------------
@@ -237,6 +203,47 @@ class Simulator:
         omega0 = check_number("omega0", omega0, low_inclusive=True,
                               high=2.0 * math.pi / self.groups.n / self.dt)
         self._c[kn.C_W0], self._c[kn.C_OMEGA0] = w0, omega0   # both valid, or neither set
+        if self.drive.mode == "kinematic":
+            self._x[kn.X_OMEGA_TD] = omega0
+
+    def set_motor_torque(self, torque: float) -> None:
+        """The motor torque command [C] (torque mode), held from now; the drive's limits, rate
+        limit and lag act on it."""
+        self._c[kn.C_T_CMD] = check_number("motor torque", torque, low=None)
+
+    @property
+    def motor_torque_command(self) -> float:
+        return float(self._c[kn.C_T_CMD])
+
+    def set_drive(self, drive: DriveGroups) -> None:
+        """Change the top drive at run time, the state kept. A change of mode is bumpless: the
+        motor torque starts from the torque the top drive was applying (from kinematic mode,
+        the string's), the speed PI's integral term so that its output is that torque, and the
+        torque command (into torque mode) is that torque; into kinematic mode the top drive
+        takes the speed command at once. Refused, nothing changed, if dt cannot resolve it."""
+        self._check_step(drive)
+        x, c, old = self._x, self._c, self.drive
+        if drive.mode != old.mode:
+            if old.mode == "kinematic":
+                x[kn.X_OMEGA_TD] = c[kn.C_OMEGA0]
+                x[kn.X_TM] = x[kn.X_TREF] = x[kn.X_TS]
+            if drive.mode == "torque":
+                c[kn.C_T_CMD] = x[kn.X_TM]
+            elif drive.mode == "speed":
+                error = c[kn.C_OMEGA0] - x[kn.X_OMEGA_TD]
+                x[kn.X_DRIVE_I] = min(max(x[kn.X_TREF] - drive.kp * error, drive.t_min),
+                                      drive.t_max)
+            else:
+                x[kn.X_OMEGA_TD] = c[kn.C_OMEGA0]
+        self.drive = drive
+        self._write_drive(drive)
+
+    def _write_drive(self, d: DriveGroups) -> None:
+        self._advance = kn.stepper(d.code)
+        p = self._p
+        p[kn.P_MODE], p[kn.P_J], p[kn.P_T_MAX], p[kn.P_T_MIN] = d.code, d.j, d.t_max, d.t_min
+        p[kn.P_RATE], p[kn.P_LAG], p[kn.P_KP], p[kn.P_KI] = d.rate, d.lag, d.kp, d.ki
+        p[kn.P_LAG_END], p[kn.P_LAG_MEAN] = d.lag_weights(self.dt)
 
     def set_hoist_speed_limit(self, limit: float) -> None:
         """Fastest upward axial speed [L*/t*]; math.inf for none (the pure model)."""
@@ -254,8 +261,8 @@ class Simulator:
 
         Raises ParameterError, the state left after the last step taken, before a step that
         would turn the bit more than a sector (see ``kernel.advance``)."""
-        kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc, n_steps,
-                   self._no_rows, 1, 0)
+        self._advance(self._x, self._k, self._surf, self._p, self._c, self._acc, n_steps,
+                      self._no_rows, 1, 0)
         if self._k[kn.K_REFUSED]:
             self._refuse_step()
 
@@ -272,8 +279,8 @@ class Simulator:
         """Advance and write a row to ``out`` at every step count that is a multiple of ``every``;
         return the next free row. A row is a sample: its w and t are the means over the steps
         since the previous sample (a row, ``take_force_sums``, ``start_sample``, a start)."""
-        row = int(kn.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
-                             n_steps, out, every, row))
+        row = int(self._advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
+                                n_steps, out, every, row))
         if self._k[kn.K_REFUSED]:
             self._refuse_step()
         return row
@@ -340,7 +347,10 @@ class Simulator:
         return StateView(tau=x[kn.X_TAU], u=x[kn.X_U], v=x[kn.X_V], phi=x[kn.X_PHI],
                          omega=x[kn.X_OMEGA], phi_td=x[kn.X_PHI_TD], w=x[kn.X_W], t=x[kn.X_T],
                          ts=x[kn.X_TS], delta_n=x[kn.X_DELTA], g=x[kn.X_G],
-                         regime=int(k[kn.K_REGIME]), since_stick=x[kn.X_SINCE_STICK])
+                         regime=int(k[kn.K_REGIME]), since_stick=x[kn.X_SINCE_STICK],
+                         omega_td=x[kn.X_OMEGA_TD],
+                         motor_torque=x[kn.X_TS if self.drive.mode == "kinematic" else kn.X_TM],
+                         drive_integral=x[kn.X_DRIVE_I], drive_reference=x[kn.X_TREF])
 
     def take_force_sums(self) -> tuple[float, float, int]:
         """(sum of w, sum of t, steps) over the steps since the previous sample (a call, an

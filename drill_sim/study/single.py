@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from ..core import Groups, Metrics, Simulator, Trajectory
 from ..core.distributed import StringWaves
 from ..core.distributed_simulator import StringSimulator
+from ..core.top_drive import DriveGroups
 
 STARTS = ("steady", "rest")
 
@@ -35,6 +36,9 @@ class RunSettings:
     start: str = "steady"      # "steady": exact steady drilling; "rest": bit at rest
     gap: float = 0.0           # with start "rest": bit height above bottom [L*]
     perturbation: float = 1e-3  # relative perturbation of the initial bit speed (steady start)
+    drive: DriveGroups | None = None   # the top drive; None: kinematic (the seed's)
+    motor_torque: float | None = None  # torque mode's command [C]; None: the start's (steady
+                                       # torque, or 0 at rest)
     waves: StringWaves | None = None  # the distributed string at step dt; None: lumped string
 
     @property
@@ -66,12 +70,15 @@ def run_single(settings: RunSettings, *, output_interval: float | None = None,
     """Run ``settings``; keep samples every ``output_interval`` [t*] (None: none);
     ``progress(fraction)`` is called between chunks."""
     s = settings
-    sim = Simulator(s.groups, s.dt) if s.waves is None else StringSimulator(s.groups, s.waves)
+    sim = (Simulator(s.groups, s.dt, drive=s.drive) if s.waves is None
+           else StringSimulator(s.groups, s.waves))
     if s.start == "steady":
         sim.start_steady(s.w0, s.omega0, s.perturbation)
     else:
         sim.start_at_rest(s.gap)
         sim.set_commands(s.w0, s.omega0)
+    if s.motor_torque is not None:
+        sim.set_motor_torque(s.motor_torque)
     total = s.lead + s.window
     parts = []
     if s.lead > 0:
