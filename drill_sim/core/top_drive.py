@@ -97,11 +97,6 @@ class TopDriveParameters:
             kp=kp / (c * ts), ki=self.drive_ki_nm_rad / c)
 
 
-def default_gains(inertia_kg_m2: float, impedance_nm_s_rad: float) -> tuple[float, float]:
-    """Simulator4nDOF's stiff PI: (K_p = 50 Z [N m s/rad], K_i = 5 J_TD [N m/rad])."""
-    return KP_PER_IMPEDANCE * impedance_nm_s_rad, KI_PER_INERTIA_S2 * inertia_kg_m2
-
-
 @dataclass(frozen=True)
 class DriveGroups:
     """The top drive, dimensionless: j = J_TD/I; motor torque limits t_min, t_max [C]; rate
@@ -123,8 +118,9 @@ class DriveGroups:
                                      ("rate", 0.0, False)):
             value = getattr(self, name)
             if value != (-math.inf if name == "t_min" else math.inf):
-                check_number(name, value, low=low, low_inclusive=inclusive,
-                             high=0.0 if name == "t_min" else None)
+                object.__setattr__(self, name, check_number(
+                    name, value, low=low, low_inclusive=inclusive,
+                    high=0.0 if name == "t_min" else None))
         _check_limits(self.t_min, self.t_max, "")
         for name in ("lag", "kp", "ki"):
             object.__setattr__(self, name, check_number(name, getattr(self, name),
