@@ -107,7 +107,13 @@ class RigNode(Node):
         self.take_commands()
         if self.paused:
             return
-        self.rig.advance_to(self.pacer.target(self.rig.time_s))
+        try:
+            self.rig.advance_to(self.pacer.target(self.rig.time_s))
+        except ParameterError as exc:   # a step the model refuses: hold the state, say why
+            self.paused = True
+            self.get_logger().error(f"simulation paused: {exc}; change the commands or "
+                                    "parameters, then resume with ~/pause false or ~/reset")
+            return
         self.pacer.advanced(self.rig.time_s)
         self.publish_sample(self.rig.sample())
 
