@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
+import struct
 
 from geometry_msgs.msg import TwistStamped
 from rclpy.serialization import serialize_message
 
+from drill_sim.bag.mcap_scan import OP_CHUNK, OP_MESSAGE_INDEX, McapScan
 from drill_sim.bag.writer import BagWriter
 from drill_sim.core import RPM, Rig, RigSample, load_preset
 from drill_sim.wire.rig_messages import RigEncoders
@@ -40,3 +42,15 @@ def rig_bag(path, ticks: int, *, prefix: str = "/drill_sim", command_every: int 
             if command_every and k % command_every == 0:
                 w.write(f"{prefix}/cmd/top_drive", serialize_message(TwistStamped()), stamp)
     return samples
+
+
+def chunk_spans(path) -> list[tuple[int, int, int]]:
+    """(record start, body end, messages from its indexes) of every chunk of an MCAP file."""
+    found: list[list[int]] = []
+    with McapScan(path, []) as scan:
+        for op, start, end in scan.records():
+            if op == OP_CHUNK:
+                found.append([start - 9, end, 0])
+            elif op == OP_MESSAGE_INDEX:
+                found[-1][2] += struct.unpack_from("<I", scan.view, start + 2)[0] // 16
+    return [tuple(c) for c in found]

@@ -5,15 +5,12 @@ file has no summary, read a file listed twice once, and refuse what is not MCAP.
 
 from __future__ import annotations
 
-import struct
-
 import pytest
 import yaml
-from bagutil import rig_bag
+from bagutil import chunk_spans, rig_bag
 
 from drill_sim.bag import reader
 from drill_sim.bag.errors import BagError
-from drill_sim.bag.mcap_scan import OP_CHUNK, OP_MESSAGE_INDEX, McapScan
 from drill_sim.bag.series import rig_series
 from drill_sim.cli.main import main
 from drill_sim.wire.rig_topics import OUTPUTS
@@ -27,16 +24,6 @@ def _bag(tmp_path, ticks: int = TICKS):
     return bag, bag / "rig_0.mcap", samples
 
 
-def _chunks(path) -> list[tuple[int, int, int]]:
-    """(record start, body end, messages from its indexes) of every chunk."""
-    found: list[list[int]] = []
-    with McapScan(path, []) as scan:
-        for op, start, end in scan.records():
-            if op == OP_CHUNK:
-                found.append([start - 9, end, 0])
-            elif op == OP_MESSAGE_INDEX:
-                found[-1][2] += struct.unpack_from("<I", scan.view, start + 2)[0] // 16
-    return [tuple(c) for c in found]
 
 
 def _messages(bag, problems=None) -> list[tuple[str, int, bytes]]:
@@ -59,7 +46,7 @@ def _flip(at: int):
 def test_a_flipped_byte_loses_only_its_chunk_and_says_what(tmp_path):
     bag, path, _ = _bag(tmp_path)
     everything = _messages(bag)
-    chunks = _chunks(path)
+    chunks = chunk_spans(path)
     assert len(chunks) >= 4 and sum(c[2] for c in chunks) == len(everything)
     start, end, lost = chunks[1]
     _edit(path, _flip((start + end) // 2))
@@ -74,7 +61,7 @@ def test_a_flipped_byte_loses_only_its_chunk_and_says_what(tmp_path):
 
 def test_info_checks_every_chunk_instead_of_trusting_the_summary(tmp_path):
     bag, path, _ = _bag(tmp_path)
-    chunks = _chunks(path)
+    chunks = chunk_spans(path)
     _, end, lost = chunks[2]
     _edit(path, _flip(end - 100))
     found = reader.info(bag)
@@ -86,7 +73,7 @@ def test_info_checks_every_chunk_instead_of_trusting_the_summary(tmp_path):
 def test_broken_framing_is_skipped_to_the_next_intact_chunk(tmp_path, how):
     bag, path, _ = _bag(tmp_path)
     everything = _messages(bag)
-    chunks = _chunks(path)
+    chunks = chunk_spans(path)
     start, end, lost = chunks[2]
 
     def change(data: bytearray) -> None:
@@ -110,7 +97,7 @@ def test_a_damaged_first_chunk_leaves_the_channels_of_the_rest_known(tmp_path):
     """The node's channels are declared in the first chunk; the summary declares them too."""
     bag, path, _ = _bag(tmp_path)
     everything = _messages(bag)
-    start, end, lost = _chunks(path)[0]
+    start, end, lost = chunk_spans(path)[0]
     _edit(path, _flip((start + end) // 2))
     got = _messages(bag)
     assert got == everything[lost:]
@@ -119,7 +106,7 @@ def test_a_damaged_first_chunk_leaves_the_channels_of_the_rest_known(tmp_path):
 
 def test_rig_series_reads_every_intact_chunk(tmp_path):
     bag, path, samples = _bag(tmp_path)
-    start, end, _ = _chunks(path)[1]
+    start, end, _ = chunk_spans(path)[1]
     _edit(path, _flip((start + end) // 2))
     series = rig_series(bag)
     wob = series.wob_n.tolist()
@@ -134,7 +121,7 @@ def test_a_file_ending_without_its_summary_is_reported(tmp_path):
     """A recording killed between two chunks ends cleanly at a record boundary, but without
     the summary: what came after is lost, and info says so."""
     bag, path, _ = _bag(tmp_path)
-    chunks = _chunks(path)
+    chunks = chunk_spans(path)
     _edit(path, lambda data: data.__delitem__(slice(chunks[3][0], None)))
     (bag / "metadata.yaml").unlink()
     found = reader.info(bag)
@@ -177,7 +164,7 @@ def test_a_loss_whose_indexes_are_damaged_too_is_counted_as_at_least(tmp_path):
     gone with its indexes, so the report gives a lower bound, never a wrong total."""
     bag, path, _ = _bag(tmp_path)
     everything = _messages(bag)
-    chunks = _chunks(path)
+    chunks = chunk_spans(path)
     (a, _, lost_a), (_, b, lost_b) = chunks[2], chunks[3]
     _edit(path, lambda data: data.__setitem__(slice(a, b), bytes(b - a)))
     problems: list[str] = []

@@ -7,17 +7,15 @@ from __future__ import annotations
 
 import errno
 import shutil
-import struct
 from pathlib import Path
 
 import pytest
-from bagutil import rig_bag
+from bagutil import chunk_spans, rig_bag
 from rosbags.rosbag2 import Reader
 
 from drill_sim.bag import reader
 from drill_sim.bag.errors import BagError
 from drill_sim.bag.mcap_file import McapFileWriter
-from drill_sim.bag.mcap_scan import OP_CHUNK, OP_MESSAGE_INDEX, McapScan
 from drill_sim.cli.main import main
 from drill_sim.wire.rig_topics import OUTPUTS
 
@@ -31,21 +29,11 @@ def _bag(tmp_path) -> tuple[Path, Path]:
     return bag, bag / "rig_0.mcap"
 
 
-def _chunks(path) -> list[tuple[int, int, int]]:
-    """(record start, body end, messages from its indexes) of every chunk."""
-    found: list[list[int]] = []
-    with McapScan(path, []) as scan:
-        for op, start, end in scan.records():
-            if op == OP_CHUNK:
-                found.append([start - 9, end, 0])
-            elif op == OP_MESSAGE_INDEX:
-                found[-1][2] += struct.unpack_from("<I", scan.view, start + 2)[0] // 16
-    return [tuple(c) for c in found]
 
 
 def _flip_chunk(path, k: int) -> int:
     """Flip one byte in the middle of chunk ``k``; the messages it held."""
-    start, end, lost = _chunks(path)[k]
+    start, end, lost = chunk_spans(path)[k]
     data = bytearray(path.read_bytes())
     data[(start + end) // 2] ^= 0x20
     path.write_bytes(bytes(data))
@@ -54,7 +42,7 @@ def _flip_chunk(path, k: int) -> int:
 
 def _cut_inside_chunk(path, k: int) -> int:
     """Cut the file in the middle of chunk ``k`` (a crash); the messages before it."""
-    chunks = _chunks(path)
+    chunks = chunk_spans(path)
     start, end, _ = chunks[k]
     path.write_bytes(path.read_bytes()[:(start + end) // 2])
     return sum(c[2] for c in chunks[:k])
