@@ -5,7 +5,11 @@ millisecond) recording everything, plus a 50 Hz driver, and samples the node's r
 size every ``--every`` seconds for ``--minutes``. Prints each sample and the growth rate over
 the second half (after the allocator and the caches have settled), in MB per minute.
 
+What remains of the growth while recording is the summary an MCAP file must end with (~200
+bytes per chunk); ``--split-s`` starts a new file that often, which hands it over.
+
 Run: .venv/bin/python benchmarks/bench_soak.py [--minutes 5] [--every 10] [--no-record]
+         [--real-time] [--split-s S]
 """
 
 from __future__ import annotations
@@ -37,11 +41,14 @@ def main() -> None:
     parser.add_argument("--every", type=float, default=10.0, help="seconds between samples")
     parser.add_argument("--no-record", action="store_true")
     parser.add_argument("--real-time", action="store_true", help="1000 Hz in real time instead")
+    parser.add_argument("--split-s", type=float, default=0.0,
+                        help="record_split_duration_s (default 0: one file)")
     args = parser.parse_args()
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     env.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     with tempfile.TemporaryDirectory() as tmp:
-        record = () if args.no_record else ("-p", f"record:={tmp}/soak")
+        record = () if args.no_record else ("-p", f"record:={tmp}/soak", "-p",
+                                            f"record_split_duration_s:={args.split_s}")
         speed = () if args.real_time else ("-p", "publish_clock:=true", "-p", "max_speed:=true")
         node = subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", "-r", "__ns:=/soak",
                                  *speed, "-p", "command_timeout_s:=3600.0", *record],
@@ -70,7 +77,8 @@ def main() -> None:
     print(f"{'recording, ' if not args.no_record else ''}"
           f"{'real time' if args.real_time else 'max speed'}, {args.minutes:g} min: RSS "
           f"{m[0]:.1f} MB after {t[0] * 60:.0f} s, {m[-1]:.1f} MB at the end; growth over the "
-          f"second half {slope:+.2f} MB/min" + (f"; bag {bag_mb:.0f} MB" if bag_mb else ""))
+          f"second half {slope:+.2f} MB/min" + (f"; bag {bag_mb:.0f} MB" if bag_mb else "")
+          + (f" in files of {args.split_s:g} s" if args.split_s else ""))
 
 
 if __name__ == "__main__":

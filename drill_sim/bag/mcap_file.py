@@ -75,6 +75,7 @@ class McapFileWriter:
         self._handed = self._done = 0          # chunk bytes handed over / done (one writer each)
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mcap-writer")
         self._last: Future | None = None
+        self._finishing = False
         self._write(MAGIC)
         self._write_records(Header(profile=profile, library=library))
 
@@ -192,7 +193,7 @@ class McapFileWriter:
         self._pool.shutdown(wait=True)
         if self._last is not None:
             self._last.result()                          # raise what went wrong there
-        self._write = self._write_now                    # the rest is written here
+        self._finishing = True                           # the rest is written here
         self._write_records(DataEnd(data_section_crc=0))
         summary_start = self._written
         groups = [(Opcode.SCHEMA, self._schemas), (Opcode.CHANNEL, self._channels),
@@ -230,7 +231,13 @@ class McapFileWriter:
             self._write(_encode(record))
 
     def _write(self, data: bytes) -> None:
-        self._submit(self._write_now, data)
+        # a flag rather than rebinding _write to _write_now: that bound method would make a
+        # reference cycle, and a finished writer (its zstd context, a few MB) would wait for
+        # the cyclic collector, file after file of a split bag
+        if self._finishing:
+            self._write_now(data)
+        else:
+            self._submit(self._write_now, data)
 
     def _write_now(self, data: bytes) -> None:
         self.stream.write(data)
