@@ -14,6 +14,7 @@ agreed, so a caller knows none were missed. A box expected to hold more than MAX
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -152,7 +153,8 @@ def stability(groups: Groups, w0: float, omega0: float, *, re_min: float = -0.5)
     _check_box(groups, steady, re_min)
     radius = _radius(groups, steady, re_min)
     box = (re_min, radius, -radius, radius)
-    count = _winding_number(box, groups, steady)
+    count = winding_number(box, lambda path: characteristic(path, groups, steady)[0],
+                           "change re_min")
     roots = np.empty(0, dtype=complex)
     for density in (40, 80, 160, 320):
         roots = _newton_from_grid(box, groups, steady, density)
@@ -164,18 +166,22 @@ def stability(groups: Groups, w0: float, omega0: float, *, re_min: float = -0.5)
                            count_argument_principle=count, complete=roots.size == count)
 
 
-def _winding_number(box, groups: Groups, steady: SteadyState) -> int:
+def winding_number(box, f: Callable[[np.ndarray], np.ndarray], edge: str,
+                   max_points: int = 2**21) -> int:
+    """Zeros of the analytic ``f`` inside ``box`` = (x0, x1, y0, y1) by the argument principle,
+    the edge refined until the phase moves less than pi/4 a point (or ``max_points`` a side);
+    a zero on the edge is a ParameterError ending with ``edge`` (what to change)."""
     x0, x1, y0, y1 = box
     corners = [complex(x0, y0), complex(x1, y0), complex(x1, y1), complex(x0, y1), complex(x0, y0)]
     points = 2048
     while True:
         path = np.concatenate([np.linspace(corners[i], corners[i + 1], points, endpoint=False)
                                for i in range(4)] + [np.array([corners[0]])])
-        value, _ = characteristic(path, groups, steady)
+        value = f(path)
         if np.any(np.abs(value) == 0.0):
-            raise ParameterError("a root of Delta(s) lies on the search box edge; change re_min")
+            raise ParameterError(f"a root lies on the search box edge; {edge}")
         steps = np.diff(np.unwrap(np.angle(value)))
-        if np.max(np.abs(steps)) < math.pi / 4 or points > 2**21:
+        if np.max(np.abs(steps)) < math.pi / 4 or points > max_points:
             return round(np.sum(steps) / (2.0 * math.pi))
         points *= 4
 

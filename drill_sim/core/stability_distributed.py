@@ -25,7 +25,7 @@ import numpy as np
 
 from .distributed import StringWaves, WaveLine
 from .parameters import Groups, ParameterError
-from .stability import SteadyState, steady_state
+from .stability import SteadyState, steady_state, winding_number
 
 
 def simulated(line: WaveLine) -> WaveLine:
@@ -79,7 +79,7 @@ def string_stability(groups: Groups, waves: StringWaves, w0: float, omega0: floa
     def f(s):
         return characteristic(s, groups, steady, waves)
 
-    count = _winding_number(box, f)
+    count = winding_number(box, f, "change the box", max_points=2**20)
     roots = np.empty(0, dtype=complex)
     for density in (40, 80, 160):
         roots = _newton_from_grid(box, f, density)
@@ -88,22 +88,6 @@ def string_stability(groups: Groups, waves: StringWaves, w0: float, omega0: floa
     nonzero = roots[np.abs(roots) > 1e-7]
     order = np.lexsort((-nonzero.imag, -np.round(nonzero.real, 9)))
     return StringStability(steady, nonzero[order], box, count, roots.size == count)
-
-
-def _winding_number(box, f) -> int:
-    x0, x1, y0, y1 = box
-    corners = [complex(x0, y0), complex(x1, y0), complex(x1, y1), complex(x0, y1), complex(x0, y0)]
-    points = 2048
-    while True:
-        path = np.concatenate([np.linspace(corners[i], corners[i + 1], points, endpoint=False)
-                               for i in range(4)] + [np.array([corners[0]])])
-        value = f(path)
-        if np.any(value == 0.0):
-            raise ParameterError("a root lies on the search box edge; change the box")
-        steps = np.diff(np.unwrap(np.angle(value)))
-        if np.max(np.abs(steps)) < math.pi / 4 or points > 2**20:
-            return round(np.sum(steps) / (2.0 * math.pi))
-        points *= 4
 
 
 def _newton_from_grid(box, f, density: int) -> np.ndarray:
