@@ -55,7 +55,8 @@ class _File:
 
 
 class BagWriter:
-    """Write a rosbag2 MCAP bag into the directory ``path`` (created; must not exist).
+    """Write a rosbag2 MCAP bag into the directory ``path`` (created in an existing folder; must
+    not exist).
 
     split_duration_s / split_size_bytes: start a new ``_<i>.mcap`` file past either (0 = never).
     metadata: name -> {str: str} written as MCAP metadata records in every file.
@@ -68,8 +69,12 @@ class BagWriter:
         self.path = Path(path)
         if self.path.exists():
             raise BagError(f"bag {self.path}: already exists; choose a new directory")
-        try:
-            self.path.mkdir(parents=True)
+        try:        # the parent folder must exist: the one rule of every recording entry point
+            self.path.mkdir()
+        except FileNotFoundError:
+            raise BagError(f"bag {self.path}: cannot record there: folder "
+                           f"{self.path.absolute().parent} does not exist; expected a new name "
+                           "in an existing folder") from None
         except OSError as exc:
             raise BagError(f"bag {self.path}: cannot create it: {exc.strerror}") from None
         self.split_duration_ns = int(split_duration_s * 1e9)

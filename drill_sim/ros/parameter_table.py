@@ -163,8 +163,9 @@ def specs(preset: Preset) -> list[Spec]:
              1e-3, 3.0, "drawworks hoist at up to ~2 m/s"),
         Spec("diagnostics_period_s", 1.0, "period of /diagnostics", "s", 0.05, 60.0,
              read_only="its timer is made at start; " + START_ONLY),
-        Spec("record", "", "bag directory to record the session into (rosbag2, MCAP); empty: "
-             "no recording", read_only="the bag is opened at start; " + START_ONLY),
+        Spec("record", "", "a new bag directory, in an existing folder, to record the session "
+             "into (rosbag2, MCAP); empty: no recording",
+             read_only="the bag is opened at start; " + START_ONLY),
         Spec("record_split_duration_s", 0.0, "start a new bag file after this long; 0: never",
              "s", 0.0, 1e7, "a file a second at least: opening and finishing files costs "
              "milliseconds", off_or_at_least=1.0),

@@ -186,6 +186,9 @@ def test_foreign_and_corrupt_input_get_clear_messages(tmp_path):
         reader.info(empty)
     with pytest.raises(BagError, match="already exists"):
         BagWriter(empty)
+    with pytest.raises(BagError, match=r"folder .*missing does not exist"):   # no parents made
+        BagWriter(tmp_path / "missing" / "bag")
+    assert not (tmp_path / "missing").exists()
     proc = subprocess.run([installed("drill_sim"), "bag", "info", str(junk)],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and "not an MCAP file" in proc.stderr
