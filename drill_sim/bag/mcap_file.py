@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import os
 import struct
+import threading
+import time
 import zlib
 from array import array
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -48,14 +50,23 @@ _MESSAGE = struct.Struct("<BQHIQQ")            # opcode, length, channel, sequen
 _MESSAGE_FIXED = 2 + 4 + 8 + 8
 _CHUNK_HEAD = struct.Struct("<BQQQQI")         # opcode, length, start, end, size, crc
 _INDEX_HEAD = struct.Struct("<BQHI")           # opcode, length, channel, records length
+# Chunk bytes handed to the writing thread and not yet written, at most: past it the adding
+# thread waits (counted in ``backlog_waits``/``backlog_wait_s``) rather than let memory grow
+# without bound when the disk is slower than the data for long. Nothing is dropped.
+MAX_BACKLOG_BYTES = 64 << 20
 
 
 class McapFileWriter:
     """Write one MCAP file to ``stream`` (binary, seekable position via ``tell``)."""
 
     def __init__(self, stream: BinaryIO, *, profile: str, library: str,
-                 chunk_size: int = 1 << 20, zstd_level: int = 3) -> None:
+                 chunk_size: int = 1 << 20, zstd_level: int = 3,
+                 max_backlog_bytes: int = MAX_BACKLOG_BYTES) -> None:
         self.stream = stream
+        self.max_backlog_bytes = max_backlog_bytes
+        self.backlog_waits = 0                 # times the adding thread waited for the disk
+        self.backlog_wait_s = 0.0              # and for how long in all
+        self._written_event = threading.Event()
         self.chunk_size = chunk_size
         self._compress = zstandard.ZstdCompressor(level=zstd_level).compress
         self._schemas: list[Schema] = []
@@ -136,8 +147,25 @@ class McapFileWriter:
         self.end_time = end if self.end_time is None else max(self.end_time, end)
         raw = bytes(self._chunk)
         self._chunk = bytearray()
+        self._wait_for_backlog(len(raw))
         self._handed += len(raw)
         self._submit(self._write_chunk, raw, start, end, indexes)
+
+    def _wait_for_backlog(self, adding: int) -> None:
+        """Wait while the chunks not yet written would exceed ``max_backlog_bytes``."""
+        if self._handed - self._done + adding <= self.max_backlog_bytes \
+                or self._handed == self._done:
+            return
+        began = time.monotonic()
+        self.backlog_waits += 1
+        while self._handed - self._done + adding > self.max_backlog_bytes \
+                and self._handed != self._done:
+            self._written_event.clear()
+            self._raise_failure()
+            if self._last is not None and self._last.done() and self._handed != self._done:
+                raise OSError("an MCAP chunk could not be written; the file ends before it")
+            self._written_event.wait(0.05)
+        self.backlog_wait_s += time.monotonic() - began
 
     def _write_chunk(self, raw: bytes, start: int, end: int,
                      indexes: dict[int, tuple[array, array]]) -> None:
@@ -167,6 +195,7 @@ class McapFileWriter:
             compressed_size=len(data), uncompressed_size=len(raw)))
         self._chunk_count += 1
         self._done += len(raw)
+        self._written_event.set()
 
     def sync(self) -> None:
         """Push everything handed over so far to the disk (in the background)."""
@@ -243,10 +272,13 @@ class McapFileWriter:
         self.stream.write(data)
         self._written += len(data)
 
-    def _submit(self, fn, *args) -> None:
+    def _raise_failure(self) -> None:
         last = self._last
         if last is not None and last.done() and last.exception() is not None:
             raise last.exception()
+
+    def _submit(self, fn, *args) -> None:
+        self._raise_failure()
         self._last = self._pool.submit(fn, *args)
 
 

@@ -4,10 +4,15 @@ the node closes a chunk at least every second and ~10 a second at max speed, for
 from __future__ import annotations
 
 import gc
+import io
+import time
 import tracemalloc
 import weakref
 
+from mcap.reader import make_reader
+
 from drill_sim.bag import reader
+from drill_sim.bag.mcap_file import McapFileWriter
 from drill_sim.bag.writer import BagWriter
 
 T0 = 1_700_000_000_000_000_000
@@ -62,3 +67,30 @@ def test_a_finished_file_is_freed_at_once(tmp_path):
         assert first() is None
     finally:
         gc.enable()
+
+
+class _SlowFile(io.BytesIO):
+    """A disk ten times slower than the data: every write waits."""
+
+    def write(self, data) -> int:
+        time.sleep(0.002)
+        return super().write(data)
+
+
+def test_chunks_waiting_for_a_slow_disk_are_bounded_and_none_is_lost():
+    """The writing thread lags a slow disk; the chunks handed to it must stay under the
+    writer's bound (the adding thread waits, counted) and every message must reach the file."""
+    stream = _SlowFile()
+    w = McapFileWriter(stream, profile="ros2", library="test", chunk_size=4096,
+                       max_backlog_bytes=16 * 4096)
+    channel = w.add_channel("/a", "cdr", w.add_schema("std_msgs/msg/Float64", "ros2msg", b""), {})
+    peak = 0
+    for i in range(20_000):
+        w.add_message(channel, i, T0 + i, T0 + i, bytes(100))
+        peak = max(peak, w._handed - w._done)
+    w.finish()
+    assert peak <= 17 * 4096 + 200, peak            # the bound plus one chunk
+    assert w.backlog_waits > 0 and w.backlog_wait_s > 0
+    stream.seek(0)
+    messages = list(make_reader(stream).iter_messages())
+    assert [m.sequence for _, _, m in messages] == list(range(20_000))
