@@ -66,6 +66,23 @@ class Measured(NamedTuple):
     fresh: tuple[bool, ...]
 
 
+def exact_measured(sample: object, severity: float = 0.0) -> Measured:
+    """The exact values of ``sample`` (a ``RigSample``) as a reading, all fresh; ``severity``
+    for the one channel a sample does not hold."""
+    return Measured(sample.time_s, *(getattr(sample, c) for c in _SAMPLE_FIELDS), severity,
+                    (True,) * len(CHANNELS))
+
+
+def session_sensors(p: dict[str, object], dt_s: float,
+                    profile: SensorProfile | None = None) -> SensorBank:
+    """The sensors of a node session's parameters ``sensor_profile`` and ``sensor_seed``
+    (ideal and 0 when absent, as in sessions recorded before they existed), called at most
+    once per model step ``dt_s`` [s]; ``profile`` overrides the named one (a recorded copy)."""
+    if profile is None:
+        profile = load_profile(str(p.get("sensor_profile", "ideal")))
+    return SensorBank(profile, dt_s, int(p.get("sensor_seed", 0)))
+
+
 class SensorBank:
     """The sensors of one profile, called once per tick of ``dt_s`` [s] (the shortest interval
     between calls the delay buffers are sized for), with noise seeded by ``seed``."""
