@@ -148,21 +148,39 @@ class SensorBank:
     def measure_series(self, time_s: np.ndarray, columns: dict[str, np.ndarray]
                        ) -> dict[str, np.ndarray]:
         """Offline: measure a whole time series (times [s] ascending, one exact array per
-        channel of ``CHANNELS`` but the severity), continuing from the bank's state; returns
-        one measured array per channel and ``fresh_<channel>`` flags."""
-        n = len(time_s)
-        out = {c: np.empty(n) for c in CHANNELS}
-        fresh = {c: np.empty(n, dtype=bool) for c in CHANNELS}
-        inputs = [np.asarray(columns[c], dtype=np.float64) for c in _SAMPLE_FIELDS]
-        for k in range(n):
-            for i, col in enumerate(inputs):
-                self._x[i] = col[k]
-            self._measure(float(time_s[k]))
-            for i, c in enumerate(CHANNELS):
-                out[c][k] = self._out[i]
-                fresh[c][k] = self._fresh[i]
-        out.update({f"fresh_{c}": fresh[c] for c in CHANNELS})
-        return out
+        channel of ``CHANNELS`` but the severity), continuing from the bank's state, as calls
+        of ``measure`` would; returns one measured array per channel and ``fresh_<channel>``
+        flags. Compiled: the rows run in the kernel, Python only refills noise blocks."""
+        times = np.ascontiguousarray(time_s, dtype=np.float64)
+        n = len(times)
+        inputs = np.zeros((n, len(CHANNELS)))
+        for i, c in enumerate(_SAMPLE_FIELDS):
+            inputs[:, i] = columns[c]
+        out = np.empty((n, len(CHANNELS)))
+        fresh = np.empty((n, len(CHANNELS)), dtype=np.bool_)
+        k = 0
+        while k < n:
+            k = _series_kernel(k, times, inputs, self._par, self._state, self._istate,
+                               self._ring, self._noise, self._window, self._window_s, out, fresh)
+            self._refill()
+        self._out[:] = out[-1] if n else self._out
+        result = {c: out[:, i].copy() for i, c in enumerate(CHANNELS)}
+        result.update({f"fresh_{c}": fresh[:, i].copy() for i, c in enumerate(CHANNELS)})
+        return result
+
+
+@nb.njit(cache=True)
+def _series_kernel(k, times, inputs, par, st, ist, ring, noise, win, window_s, out, fresh):
+    """Rows k... of a series through ``_measure_kernel``; returns the next row, early when a
+    noise block must be refilled."""
+    n = times.shape[0]
+    while k < n:
+        refill = _measure_kernel(times[k], inputs[k], par, st, ist, ring, noise, win, window_s,
+                                 out[k], fresh[k])
+        k += 1
+        if refill:
+            break
+    return k
 
 
 @nb.njit(cache=True)

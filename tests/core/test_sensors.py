@@ -234,3 +234,18 @@ def test_a_negative_bias_is_allowed_and_a_missing_profile_named():
         SensorBank("ideal", 1e-3, -1)
     with pytest.raises(ParameterError, match="dt_s"):
         SensorBank("ideal", float("nan"))
+
+
+def test_a_series_measured_offline_equals_the_calls_one_by_one():
+    """measure_series (compiled rows) and measure (one call a tick) give the same bits, across
+    noise refills."""
+    n = 3 * NOISE_BLOCK
+    times = np.arange(n) * 1e-3
+    rng = np.random.default_rng(4)
+    columns = {c: EXACT[c] * (1 + 0.1 * rng.standard_normal(n)) for c in EXACT}
+    series = SensorBank("wired_pipe", 1e-3, 9).measure_series(times, columns)
+    b = SensorBank("wired_pipe", 1e-3, 9)
+    for k in range(n):
+        m = b.measure(times[k], sample(**{c: columns[c][k] for c in EXACT}))
+        for i, c in enumerate(CHANNELS):
+            assert series[c][k] == m[1 + i] and series[f"fresh_{c}"][k] == m.fresh[i], (k, c)
