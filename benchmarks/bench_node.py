@@ -8,7 +8,8 @@
     sample carrying it received back [p50 <= 1.5 ms, p99 <= 3 ms], without and with recording;
   - max_speed with publish_clock: simulated seconds per wall second [>= 20].
 
-Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30]
+Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30] [--sensor-profile NAME]
+[--rate-only] (the sensors of a profile, msg_docs/sensors.md; only the 1000 Hz rate and CPU)
 """
 
 from __future__ import annotations
@@ -37,8 +38,11 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
+SENSORS: list[str] = []          # -p sensor_profile:=... for every node started
+
+
 def start(*args: str) -> subprocess.Popen:
-    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *args],
+    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *SENSORS, *args],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
@@ -135,12 +139,20 @@ def max_speed(node, rate_hz: float, seconds: float = 10.0) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--seconds", type=float, default=30.0)
+    parser.add_argument("--sensor-profile", default="ideal")
+    parser.add_argument("--rate-only", action="store_true")
     args = parser.parse_args()
+    SENSORS[:] = ["-p", f"sensor_profile:={args.sensor_profile}"]
+    print(f"sensor profile {args.sensor_profile}")
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     rclpy.init()
     node = rclpy.create_node("drill_sim_bench")
     plain = rate_and_cpu(node, args.seconds)
+    if args.rate_only:
+        node.destroy_node()
+        rclpy.shutdown()
+        return
     with tempfile.TemporaryDirectory() as tmp:
         recording = rate_and_cpu(node, args.seconds, record=f"{tmp}/bag")
     print(f"CPU added by in-node recording: {100 * (recording - plain):.1f} % of one core")
