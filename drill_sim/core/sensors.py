@@ -123,6 +123,13 @@ class SensorBank:
         self._window[:] = 0.0
         self._window[W_END] = math.nan
 
+    def warm_up(self) -> None:
+        """Load (or compile) the kernel now, on scratch copies: the state stays untouched, so
+        a real-time caller's first tick does not wait for the compiler."""
+        _measure_kernel(0.0, self._x.copy(), self._par, self._state.copy(),
+                        self._istate.copy(), self._ring.copy(), self._noise, self._window.copy(),
+                        self._window_s, self._out.copy(), self._fresh.copy())
+
     def measure(self, time_s: float, sample: object) -> Measured:
         """The measurements at ``time_s`` [s] (not before the last call's) of ``sample``, any
         object with the ``RigSample`` fields named in ``CHANNELS`` (SI)."""

@@ -50,6 +50,7 @@ class RigNode(Node):
             self.rig = session.make_rig(self.p)
             session.start(self.rig, self.p)
             self.sensors = session_sensors(self.p, self.rig.dt_s)   # what ~/measured/ shows
+            self.sensors.warm_up()
         except (ParameterError, NoSteadyDrilling) as exc:
             raise SystemExit(f"drill_sim_node: {exc}") from None
         self.add_on_set_parameters_callback(self._on_set_parameters)

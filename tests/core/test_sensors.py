@@ -249,3 +249,12 @@ def test_a_series_measured_offline_equals_the_calls_one_by_one():
         m = b.measure(times[k], sample(**{c: columns[c][k] for c in EXACT}))
         for i, c in enumerate(CHANNELS):
             assert series[c][k] == m[1 + i] and series[f"fresh_{c}"][k] == m.fresh[i], (k, c)
+
+
+def test_warm_up_leaves_the_state_untouched():
+    def first(b: SensorBank) -> tuple:
+        return tuple(b.measure(k * 1e-3, sample()) for k in range(50))
+
+    warmed = SensorBank("surface_rig", 1e-3, 2)
+    warmed.warm_up()
+    assert first(warmed) == first(SensorBank("surface_rig", 1e-3, 2))
