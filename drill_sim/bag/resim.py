@@ -129,6 +129,7 @@ class _Rerun:
         self.rig, self.p, self.epoch_ns, self.result = rig, p, epoch_ns, result
         self.offset_s = 0.0                      # simulated time before the last reset
         self.values_at: int | None = None        # byte offset of the joint arrays
+        self.types = {t.command: t.type_name for t in rig_topics.COMMANDS}
 
     def sample(self, data: bytes) -> None:
         if self.values_at is None:
@@ -154,7 +155,7 @@ class _Rerun:
 
     def command(self, name: str, data: bytes) -> None:
         """A recorded command, accepted or refused by the node's own rule."""
-        frame, _, _, six = cdr.decode_stamped_vectors(data)
+        frame, _, _, six = cdr.decode_command(self.types[name], data)
         if session.apply_command(self.rig, self.p, name, frame, six) is None:
             self.result.commands += 1
         else:
