@@ -105,7 +105,8 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
     result = ResimResult(bag.path, "sim-time" if p.get("publish_clock") else "real-time",
                          meta["session"].get("preset", "?"))
     try:
-        rig = session.make_rig(p)
+        # the step the node used; bags from before it was recorded ran at dt_s itself
+        rig = session.make_rig(p, float(meta["session"].get("step_s", p["dt_s"])))
         session.start(rig, p)
     except (ParameterError, NoSteadyDrilling, KeyError) as exc:
         raise BagError(f"bag {bag.path}: the recorded parameters do not make a rig: {exc}") \
