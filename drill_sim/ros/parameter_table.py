@@ -205,6 +205,14 @@ def specs(preset: Preset) -> list[Spec]:
         Spec("record_split_size_bytes", 0, "start a new bag file past this size; 0: never",
              "bytes", 0, 2**62, "1 MiB at least: smaller than a chunk, files would split at "
              "every flush", off_or_at_least=MIB),
+        Spec("sensor_profile", "ideal", "what the ~/measured/ topics show: a sensor profile "
+             "name (ideal, surface_rig, mud_pulse, wired_pipe) or a profile YAML file "
+             "(msg_docs/sensors.md)",
+             read_only="the sensors' filters and delays start with the session (bag resim "
+                       "re-runs them); " + START_ONLY),
+        Spec("sensor_seed", 0, "seed of the sensors' noise: the same seed, the same noise",
+             "", 0, 2**31 - 1, "a non-negative 32-bit whole number",
+             read_only="the noise streams start from it; " + START_ONLY),
     ]
     return out + top_drive_specs(preset)
 
