@@ -26,7 +26,7 @@ def session_bag(path, ticks: int, *, rate_hz: float = 100.0, speedup: float = 10
     sensors = session_sensors(p, rig.dt_s)
     meta = {"parameters": {k: str(v) for k, v in sorted(p.items())},
             "session": {"preset": "base", "node": node, "stamp_epoch_ns": "0",
-                        "events_topic": f"{node}/events"}}
+                        "events_topic": f"{node}/events", "step_s": repr(rig.dt_s)}}
     enc = RigEncoders(with_clock=False)
     topics = [t.under(node) for t in enc.topics]
     with BagWriter(path, metadata=meta, chunk_size=chunk_size,

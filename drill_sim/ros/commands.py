@@ -24,7 +24,7 @@ from rclpy.node import Node
 from rclpy.type_support import check_is_valid_msg_type
 
 from ..wire import WireError, rig_topics
-from ..wire.cdr import decode_stamped_vectors
+from ..wire.cdr import JointCommand, decode_command
 from ..wire.rig_topics import RigTopic
 from .topics import message_class, rclpy_qos
 
@@ -38,7 +38,8 @@ class Command:
     frame_id: str
     sec: int
     nanosec: int
-    six: tuple[float, ...]           # the six float64 (``wire.cdr.VECTOR_FIELDS`` order)
+    six: tuple[float, ...] | JointCommand   # the six float64 (``wire.cdr.VECTOR_FIELDS``
+                                            # order); a JointState's names and arrays
 
 
 class CommandInbox:
@@ -60,6 +61,19 @@ class CommandInbox:
         self.limit = limit or max(t.qos_for(reliability).depth for t in rig_topics.COMMANDS)
         self.received = self.lost = self.undecodable = 0
         self._last_sequence: dict[str, int] = {}
+        self._context = node.context.handle
+        self._wait_set = _rclpy.WaitSet(len(self._subs), 0, 0, 0, 0, 0, self._context)
+
+    def wait(self, timeout_s: float) -> None:
+        """Block until a command has arrived on any topic, or ``timeout_s`` [s] passed:
+        the middleware wakes the thread, so a lockstep wait costs no CPU and no polling
+        delay."""
+        ws = self._wait_set
+        with self._context:
+            ws.clear_entities()
+            for _, handle, _ in self._subs:
+                ws.add_subscription(handle)
+            ws.wait(max(0, int(timeout_s * 1e9)))
 
     def take(self) -> list[Command]:
         """What arrived since the last call, at most ``limit`` per topic, each topic's in
@@ -74,7 +88,7 @@ class CommandInbox:
                 self.received += 1
                 self._count_gap(t.name, handle, info.get("publication_sequence_number"))
                 try:
-                    frame_id, sec, nanosec, six = decode_stamped_vectors(data)
+                    frame_id, sec, nanosec, six = decode_command(t.type_name, data)
                 except WireError:
                     self.undecodable += 1
                     continue
@@ -91,6 +105,7 @@ class CommandInbox:
             self.lost += sequence - last - 1
 
     def destroy(self) -> None:
+        self._wait_set.destroy_when_not_in_use()
         for _, handle, _ in self._subs:
             handle.destroy_when_not_in_use()
         self._subs = []

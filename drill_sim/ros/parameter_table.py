@@ -14,9 +14,13 @@ from dataclasses import dataclass
 
 from ..core import Preset
 from ..core.simulator import DEFAULT_DT
+from ..core.top_drive import MODES as TOP_DRIVE_MODES
+from ..wire import rig_topics
 
 MIB = 1 << 20
-BOOL, INT, FLOAT, STR = bool, int, float, str
+BOOL, INT, FLOAT, STR, NAMES = bool, int, float, str, list
+# the command topics a lockstep tick can wait for, as lockstep_topics names them
+LOCKSTEP_CHOICES = tuple(t.name[2:] for t in rig_topics.COMMANDS)
 
 
 @dataclass(frozen=True)
@@ -47,6 +51,8 @@ class Spec:
             return "true or false"
         if self.kind is STR:
             return "one of " + ", ".join(self.choices) if self.choices else "text"
+        if self.kind is NAMES:
+            return "a list of one or more of " + ", ".join(self.choices) + ", each once"
         what = "a whole number" if self.kind is INT else "a finite number"
         if self.low is None:
             return what
@@ -58,6 +64,8 @@ class Spec:
         """(the value in the parameter's type, None), or (value, why it is refused). Integers
         are taken for real numbers, and whole real numbers for integers."""
         kind = self.kind
+        if kind is NAMES:
+            return self._check_names(value)
         if kind is FLOAT and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
         elif kind is INT and isinstance(value, float) and value.is_integer():
@@ -74,8 +82,21 @@ class Spec:
             ok = low <= value <= self.high
         if ok:
             return value, None
+        return value, self._refusal(value)
+
+    def _refusal(self, value: object) -> str:
         why = f" ({self.why})" if self.why else ""
-        return value, f"{self.name} = {value!r}: expected {self.expected()}{why}"
+        return f"{self.name} = {value!r}: expected {self.expected()}{why}"
+
+    def _check_names(self, value: object) -> tuple[object, str | None]:
+        """A list of names from ``choices`` (a single name is a list of one; a leading ``~/``
+        is dropped), each once."""
+        names = [value] if isinstance(value, str) else value
+        if isinstance(names, (list, tuple)) and all(isinstance(n, str) for n in names):
+            names = [n[2:] if n.startswith("~/") else n for n in names]
+            if names and len(set(names)) == len(names) and set(names) <= set(self.choices):
+                return names, None
+        return value, self._refusal(value)
 
 
 def _number(x: float, kind: type) -> str:
@@ -134,9 +155,21 @@ def specs(preset: Preset) -> list[Spec]:
              "clock; " + START_ONLY),
         Spec("max_speed", False, "with publish_clock: step as fast as possible",
              read_only="it chooses the node's tick loop; " + START_ONLY),
-        Spec("dt_s", DEFAULT_DT * t_star, "fixed integration step", "s", 1e-7, 0.01,
+        Spec("dt_s", DEFAULT_DT * t_star, "largest integration step; the step used is the "
+             "largest divisor of the tick 1/rate_hz not above it", "s", 1e-7, 0.01,
              "the model's step must stay well below t* (0.21 s on base)",
              read_only="the step is fixed for a session (bag resim re-runs it); " + START_ONLY),
+        Spec("lockstep", False, "with publish_clock: after each tick wait for a command "
+             "stamped with its time on each of lockstep_topics, then advance (msg_docs/node.md, "
+             "Lockstep)", read_only="it chooses the node's tick loop; " + START_ONLY),
+        Spec("lockstep_topics", ["cmd/top_drive"], "the command topics a lockstep tick waits "
+             "for", read_only="the wait is set up at start; " + START_ONLY,
+             choices=LOCKSTEP_CHOICES),
+        Spec("lockstep_timeout_s", 1.0, "a lockstep tick waiting longer than this warns and "
+             "is published again (the rig keeps waiting)", "s", 0.01, 3600.0),
+        Spec("start_paused", False, "start paused: nothing is published until ~/pause false, "
+             "so a controller can connect before the first tick",
+             read_only="it applies at start only"),
         Spec("qos_reliability", "reliable", "reliability of every rig topic",
              read_only="publishers and subscriptions are made with it; " + START_ONLY,
              choices=("reliable", "best_effort")),
@@ -181,7 +214,38 @@ def specs(preset: Preset) -> list[Spec]:
              "", 0, 2**31 - 1, "a non-negative 32-bit whole number",
              read_only="the noise streams start from it; " + START_ONLY),
     ]
-    return out
+    return out + top_drive_specs(preset)
+
+
+def top_drive_specs(preset: Preset) -> list[Spec]:
+    """The top drive's parameters (``core.top_drive.TopDriveParameters``' fields, defaults
+    from the preset); all change at run time, a change of mode bumplessly."""
+    d = preset.top_drive
+    rate = 0.0 if d.motor_torque_rate_nm_s == math.inf else d.motor_torque_rate_nm_s
+    torque = "top drives deliver ~30-110 kN m; 1 MN m is beyond any"
+    return [
+        Spec("top_drive_mode", d.top_drive_mode, "kinematic (an ideal speed source), speed "
+             "(the drive's own PI on the speed set-point) or torque (the motor torque is the "
+             "command ~/cmd/top_drive_torque)", choices=TOP_DRIVE_MODES),
+        Spec("top_drive_inertia_kg_m2", d.top_drive_inertia_kg_m2, "top drive's polar inertia "
+             "J_TD (motor, gearbox, quill)", "kg m^2", 1.0, 1e5,
+             "published field models use ~2900 kg m^2; 1e5 is close to an ideal speed source"),
+        Spec("motor_torque_max_nm", d.motor_torque_max_nm, "largest motor torque T_max", "N m",
+             0.0, 1e6, torque),
+        Spec("motor_torque_min_nm", d.motor_torque_min_nm, "smallest motor torque T_min (0: a "
+             "drive that cannot brake)", "N m", -1e6, 0.0, torque),
+        Spec("motor_torque_rate_nm_s", rate, "motor torque rate limit; 0: none", "N m/s",
+             0.0, 1e9, "drives ramp their torque in ~10 ms to seconds", off_or_at_least=1.0),
+        Spec("drive_lag_s", d.drive_lag_s, "time constant of the motor torque's first-order "
+             "lag (the drive's current loop); 0: none", "s", 0.0, 10.0,
+             "current loops settle in ~1-50 ms"),
+        Spec("drive_kp_nm_s_rad", float(d.drive_kp_nm_s_rad or 0.0), "speed mode: the drive "
+             "PI's proportional gain K_p (default 50 Z, Z the pipe's torsional impedance)",
+             "N m s/rad", 0.0, 1e8, "a stiff PI is ~50 Z (1.5e4 on base)"),
+        Spec("drive_ki_nm_rad", float(d.drive_ki_nm_rad), "speed mode: the drive PI's "
+             "integral gain K_i (default 5 J_TD [1/s^2])", "N m/rad", 0.0, 1e9,
+             "5 J_TD is 1.45e4 for 2900 kg m^2"),
+    ]
 
 
 PRESET_READ_ONLY = "the preset sets every model parameter's default; " + START_ONLY
@@ -193,6 +257,9 @@ def cross_refusal(values: dict[str, object]) -> str | None:
     if values["max_speed"] and not values["publish_clock"]:
         return ("max_speed = true needs publish_clock = true: faster than real time, a "
                 "controller can only follow the simulation on /clock")
+    if values["lockstep"] and not values["publish_clock"]:
+        return ("lockstep = true needs publish_clock = true: the commands answer ticks by "
+                "their /clock time")
     if values["initial_weight_on_bit_n"] > values["submerged_weight_n"]:
         return (f"initial_weight_on_bit_n = {values['initial_weight_on_bit_n']:g} N exceeds "
                 f"submerged_weight_n = {values['submerged_weight_n']:g} N: the string cannot "

@@ -148,5 +148,5 @@ def _context(p: dict[str, object], rig: Rig, preset: str, node: str, stamp_epoch
                    "stiffness_nm_per_rad": repr(sc.stiffness_nm_per_rad)},
         "figures": {k: repr(v) for k, v in key_figures(rig.params).items()},
         "session": {"preset": preset, "node": node, "stamp_epoch_ns": str(stamp_epoch_ns),
-                    "events_topic": events_topic},
+                    "events_topic": events_topic, "step_s": repr(rig.dt_s)},
     }
