@@ -16,14 +16,15 @@ is one tick; per channel, in the order a physical chain has them:
    sample without noise (as if the signal had been steady before the start).
 
 The stick-slip severity is computed downhole: (max - min) / (2 mean) of the exact bit speed over
-consecutive windows of ``window_s``, held between window ends (0 before the first; capped at
-``SEVERITY_MAX``, which a bit stopped for a whole window shows), then measured like the others.
+consecutive windows of ``window_s`` (the mean over the window's calls), held between window
+ends (0 before the first; capped at ``SEVERITY_MAX``, which a bit stopped for a whole window
+shows), then measured like the others.
 
 Noise comes from one numpy Generator per channel, spawned from ``SeedSequence(seed)`` (so a
 channel's noise does not depend on the other channels' rates) and drawn in blocks into a fixed
-buffer; the delay lives in a fixed ring buffer. A call allocates nothing but its result, and the
-whole bank is one compiled kernel call; the same profile, dt_s, seed and calls give the same
-measurements bit for bit.
+buffer; the delay lives in a fixed ring buffer. The kernel allocates nothing (a call builds only
+its inputs and result), and the whole bank is one compiled kernel call; the same profile, dt_s,
+seed and calls give the same measurements bit for bit.
 """
 
 from __future__ import annotations
