@@ -9,6 +9,16 @@ bottom torque a - (z + c) omega and W0 by its bottom force a_a - (z_a + c_a) v (
 predicted at each part's midpoint from the last step's acceleration); (3) send the reflected
 invariants b = a - 2 z omega_mean up from the BHA, solve each junction (impedance change and
 dashpot) and the top boundary, and write the departing invariants into the slots just read.
+
+The top boundary: in kinematic mode the speed omega0 is imposed (departing a = b + 2 z omega0).
+With a top drive in the loop (speed or torque mode) the top of the string is the drive's
+inertia j: j dOmega_TD/dt = T_m - T_top with T_top = b + z Omega_TD, the characteristic
+relation of the arriving invariant b (held over the step). The lumped kernel's ``_drive_step``
+(PI, limits, rate limit, lag) solves it by the trapezoidal rule with the string torque taken at
+the mean speed, b + z (Omega_TD + Omega_TD+)/2, which is the lumped call with h/j replaced by
+(h/j)/(1 + h z/(2 j)) and the string torque by b + z Omega_TD. The departing invariant is
+a = b + 2 z Omega_mean, so the drive's kinetic energy, the motor's work and the line's energy
+balance exactly step by step (msg_docs/model.md, "The distributed string").
 Memory is fixed: the ring buffers are sized at construction; nothing is allocated per step.
 """
 
@@ -27,7 +37,10 @@ from .kernel import (
     _accumulate,
     _bit_rock_law,
     _blade_height,
+    _drive_step,
     _first_swept_node,
+    _load_drive,
+    _store_drive,
     _surface_at,
 )
 
@@ -94,16 +107,38 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
     dom, dv, a_prev = x[X_DOM], x[X_DV], x[X_A_PREV]
     t_bot, f_bot, v_top, f_top = x[X_T_BOTTOM], x[X_F_BOTTOM], x[X_V_TOP], x[X_F_TOP]
     a_w, a_tob = acc[kn.A_W], acc[kn.A_T]
-    work_td, work_w, work_h = acc[kn.A_WORK_TOP_DRIVE], acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST]
+    work_w, work_h = acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST]
     damp_r, damp_a = acc[A_DAMPED_ROT], acc[A_DAMPED_AX]
     ts_top = x[kn.X_TS]
+    # the top drive (kinematic: the ideal speed source omega0)
+    mode = np.int64(p[kn.P_MODE])
+    drive = mode != kn.MODE_KINEMATIC
+    t_cmd = c[kn.C_T_CMD]
+    t_max, t_min, kp, ki = p[kn.P_T_MAX], p[kn.P_T_MIN], p[kn.P_KP], p[kn.P_KI]
+    c_end, c_mean = p[kn.P_LAG_END], p[kn.P_LAG_MEAN]
+    rate_step = p[kn.P_RATE] * h
+    z_top = tz[0]
+    hj = h / p[kn.P_J]
+    hj_top = hj / (1.0 + 0.5 * hj * z_top)        # the string's b + z Omega, trapezoidal
+    om_td, integral, tm, ref, a_otd, a_tm, a_wm, work_td = _load_drive(x, acc)
+    if not drive:
+        om_td = om0
     for _ in range(n_steps):
         _arrivals(tbuf, toff, tn, tslot, steps, ta_in, tb_in)
         _arrivals(abuf, aoff, an, aslot, steps, aa_in, ab_in)
         a_t, a_a = ta_in[mt - 1], aa_in[ma - 1]
         rate = (a_t - a_prev) / h          # the bottom torque's rate while the bit is held
-        # the top: speed imposed; hook force w0 unless the drawworks' speed limit holds it
-        ts_top = tb_in[0] + tz[0] * om0
+        # the top: speed imposed or the drive's inertia under its motor torque; hook force w0
+        # unless the drawworks' speed limit holds it
+        om_top, integral_m, om_td_new, tm_new, ref_new, t_bar = om0, integral, om0, tm, ref, tm
+        if drive:
+            if mode == kn.MODE_SPEED:
+                integral_m = integral + 0.5 * h * ki * (om0 - om_td)
+            om_td_new, tm_new, ref_new, t_bar = _drive_step(
+                mode, om_td, integral_m, tm, ref, tb_in[0] + z_top * om_td, om0, t_cmd,
+                rate_step, hj_top, kp, t_min, t_max, c_end, c_mean)
+            om_top = 0.5 * (om_td + om_td_new)
+        ts_top = tb_in[0] + z_top * om_top
         v_top = (w0 - ab_in[0]) / az[0]
         if v_top < v_min:
             v_top = v_min
@@ -171,12 +206,23 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
             k[kn.K_REFUSED] = 1
             break
         # the string: reflections at the BHA, junctions, the top
-        damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tslot, ta_in, tb_in, om0, om_int / h)
+        damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tslot, ta_in, tb_in, om_top,
+                                 om_int / h)
         damp_a += h * _junctions(abuf, aoff, an, az, ac, aslot, aa_in, ab_in, v_top, v_int / h)
-        work_td += h * ts_top * om0
+        work_td += h * ts_top * om_top
         work_w += h * w0 * v_top
         work_h += h * (f_top - w0) * v_top
-        ptd += h * om0
+        ptd += h * om_top
+        a_otd += h * om_top
+        if drive:
+            a_tm += h * t_bar
+            a_wm += h * t_bar * om_top
+            if mode == kn.MODE_SPEED:          # the integral term, held within the limits
+                integral = min(max(integral_m + 0.5 * h * ki * (om0 - om_td_new), t_min), t_max)
+            om_td, tm, ref = om_td_new, tm_new, ref_new
+        else:                                  # the ideal source's torque is the string's
+            a_tm += h * ts_top
+            a_wm += h * ts_top * om0
         a_prev = a_t
         steps += 1
         if out_row < rows and steps % out_every == 0:
@@ -187,6 +233,7 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
             o[kn.O_T] = sum_t / (steps - sampled)
             o[kn.O_TS], o[kn.O_DELTA], o[kn.O_REGIME] = ts_top, delta, regime
             o[kn.O_W0], o[kn.O_OMEGA0], o[kn.O_G] = w0, om0, g
+            o[kn.O_OMEGA_TD], o[kn.O_TM] = om_td, tm if drive else ts_top
             if extra:
                 o[O_T_BOTTOM], o[O_F_BOTTOM], o[O_V_TOP], o[O_F_TOP] = t_bot, f_bot, v_top, f_top
             out_row += 1
@@ -205,6 +252,7 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
     acc[kn.A_OMEGA0] += (steps - k[kn.K_STEPS]) * h * om0
     k[kn.K_STEPS], k[kn.K_SAMPLED] = steps, sampled
     acc[kn.A_W], acc[kn.A_T] = a_w, a_tob
-    acc[kn.A_WORK_TOP_DRIVE], acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST] = work_td, work_w, work_h
+    _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, work_td)
+    acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST] = work_w, work_h
     acc[A_DAMPED_ROT], acc[A_DAMPED_AX] = damp_r, damp_a
     return out_row
