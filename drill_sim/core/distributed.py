@@ -6,9 +6,11 @@ C (phi_td - phi) replaced by the pipe's bottom torque and W0 by the pipe's botto
 (msg_docs/model.md, "The distributed string"). A lossless uniform section is an exact delay of
 its two Riemann invariants a = T + Z omega (down) and b = T - Z omega (up); with the step h, a
 section of travel time D is a ring buffer of N = round(D/h) step means. Viscous damping per unit
-length is lumped into ``stations`` dashpots per section, each at the bottom of a segment of
-equal length. This module turns SI geometry into that dimensionless description and gives the
-sections' transfer matrices (frequency domain) for the theory.
+length is lumped into ``stations`` dashpots per section, at the centres of equal parts of it
+(the midpoint rule: the damped modes' decay rates within ~0.5 % of the continuously damped
+pipe's at 8 stations, where dashpots at the parts' ends were 16 % off for the first mode).
+This module turns SI geometry into that dimensionless description and gives the sections'
+transfer matrices (frequency domain) for the theory.
 """
 
 from __future__ import annotations
@@ -139,23 +141,31 @@ def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float,
         speed = math.sqrt(modulus / rho)
         z, delay, steps, dash = [], [], [], []
         for sec in sections:
-            k = stations if getattr(sec, damp) > 0.0 else 1
-            total = max(k, round(sec.length_m / speed / ts / h))
-            for j in range(k):
-                n_j = total * (j + 1) // k - total * j // k
+            k = stations if getattr(sec, damp) > 0.0 else 0
+            # segment ends: 0, (j - 1/2)/k (the dashpots, at the centres of k equal parts), 1
+            ends = [0.0, *((j + 0.5) / k for j in range(k)), 1.0]
+            total = max(k + 1, round(sec.length_m / speed / ts / h))
+            bounds = [0, *(min(max(round(total * e), 1 + j), total - k + j)
+                           for j, e in enumerate(ends[1:-1])), total]
+            for j in range(k + 1):
                 z.append(getattr(sec, prop) * math.sqrt(modulus * rho) / imp_scale)
-                delay.append(sec.length_m / k / speed / ts)
-                steps.append(n_j)
-                dash.append(getattr(sec, damp) * sec.length_m / k / imp_scale)
+                delay.append((ends[j + 1] - ends[j]) * sec.length_m / speed / ts)
+                steps.append(bounds[j + 1] - bounds[j])
+                dash.append(getattr(sec, damp) * sec.length_m / k / imp_scale if j < k else 0.0)
         lines.append(WaveLine(np.array(z), np.array(delay), np.array(steps, dtype=np.int64),
                               np.array(dash), h))
     return StringWaves(lines[0], lines[1], h)
 
 
 def geometry_waves(params: RigParameters, geometry: StringGeometry, h: float,
-                   young_modulus_pa: float = 200e9, torsional_damping: float = 0.0,
-                   axial_damping: float = 0.0) -> StringWaves:
-    """The wave lines of a preset's pipe (one section) at step ``h`` [t*]."""
+                   young_modulus_pa: float = 200e9, torsional_damping: float | None = None,
+                   axial_damping: float | None = None) -> StringWaves:
+    """The wave lines of a preset's pipe (one section) at step ``h`` [t*]; damping per unit
+    length (torsional [N m s/rad per m], axial [N s/m per m]) None: the geometry's."""
+    if torsional_damping is None:
+        torsional_damping = geometry.torsional_damping_nm_s_per_rad_m
+    if axial_damping is None:
+        axial_damping = geometry.axial_damping_n_s_per_m2
     return string_waves(params, pipe_sections(geometry, torsional_damping, axial_damping), h,
                         shear_modulus_pa=geometry.shear_modulus_pa,
                         young_modulus_pa=young_modulus_pa,
