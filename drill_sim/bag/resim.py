@@ -104,7 +104,8 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
     result = ResimResult(bag.path, "sim-time" if p.get("publish_clock") else "real-time",
                          meta["session"].get("preset", "?"))
     try:
-        rig = session.make_rig(p)
+        geometry = session.geometry_from_record(meta["string"]) if "string" in meta else None
+        rig = session.make_rig(p, geometry)
         session.start(rig, p)
     except (ParameterError, NoSteadyDrilling, KeyError) as exc:
         raise BagError(f"bag {bag.path}: the recorded parameters do not make a rig: {exc}") \

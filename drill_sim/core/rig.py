@@ -95,6 +95,7 @@ class Rig:
         dt = DEFAULT_DT if dt_s is None else check_number("dt_s", dt_s) / ts
         _check_step(dt * ts, params, self.top_drive)
         self.sim = self._simulator(dt, geometry)
+        self.geometry = geometry               # the pipe of the distributed string
         self._torque_nm = 0.0
         self.set_stick_window(4.0 * math.pi * ts if stick_window_s is None else stick_window_s)
         self.set_hoist_speed_limit(hoist_speed_limit_m_s)

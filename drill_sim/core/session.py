@@ -10,7 +10,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
-from .parameters import ParameterError, RigParameters
+from .parameters import ParameterError, RigParameters, StringGeometry
 from .rig import Rig
 
 COMMAND_FRAMES = ("", "top_drive")        # frame_id accepted on commands
@@ -54,10 +54,27 @@ def figures_line(params: RigParameters) -> str:
             f"lambda {f['lambda']:.3g}, beta {f['beta']:.3g}")
 
 
-def make_rig(p: dict[str, object]) -> Rig:
-    """The rig of a session's parameters, not yet started."""
+def make_rig(p: dict[str, object], geometry: StringGeometry | None = None) -> Rig:
+    """The rig of a session's parameters, not yet started. ``string_model`` (absent: lumped,
+    as in sessions recorded before it existed) ``distributed`` needs ``geometry``, the
+    preset's pipe (the node's) or the one a bag's ``string`` record kept (``bag resim``)."""
     return Rig(rig_parameters(p), dt_s=p["dt_s"], stick_window_s=p["stick_slip_window_s"],
-               hoist_speed_limit_m_s=p["hoist_speed_limit_m_s"])
+               hoist_speed_limit_m_s=p["hoist_speed_limit_m_s"],
+               string_model=p.get("string_model", "lumped"), geometry=geometry)
+
+
+def geometry_record(geometry: StringGeometry) -> dict[str, str]:
+    """The pipe geometry as a bag's ``string`` metadata record (field -> exact text)."""
+    return {f.name: repr(float(getattr(geometry, f.name))) for f in fields(StringGeometry)}
+
+
+def geometry_from_record(record: dict[str, str]) -> StringGeometry:
+    """The geometry ``geometry_record`` wrote (ParameterError if it is not one)."""
+    names = {f.name for f in fields(StringGeometry)}
+    try:
+        return StringGeometry(**{k: float(v) for k, v in record.items() if k in names})
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"string record {record!r}: not a pipe geometry ({exc})") from None
 
 
 def start(rig: Rig, p: dict[str, object]) -> None:

@@ -46,7 +46,7 @@ class RigNode(Node):
         super().__init__(rig_topics.NODE_NAME, **kwargs)
         try:
             self.preset, self._specs, self.p = parameters.declare(self)
-            self.rig = session.make_rig(self.p)
+            self.rig = session.make_rig(self.p, self.preset.string)
             session.start(self.rig, self.p)
         except (ParameterError, NoSteadyDrilling) as exc:
             raise SystemExit(f"drill_sim_node: {exc}") from None
