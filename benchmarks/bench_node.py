@@ -8,7 +8,9 @@
     sample carrying it received back [p50 <= 1.5 ms, p99 <= 3 ms], without and with recording;
   - max_speed with publish_clock: simulated seconds per wall second [>= 20].
 
-Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30]
+Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30] [--string-model distributed]
+[--rate-only] (--string-model: the node's string_model for every run; --rate-only: the first
+figure alone, without and with recording)
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 BIN = Path(sys.executable).parent
+NODE_ARGS: list[str] = []       # parameters every node started here gets (--string-model)
 
 
 def cpu_seconds(pid: int) -> float:
@@ -38,7 +41,7 @@ def cpu_seconds(pid: int) -> float:
 
 
 def start(*args: str) -> subprocess.Popen:
-    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *args],
+    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *NODE_ARGS, *args],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
@@ -71,6 +74,7 @@ def rate_and_cpu(node, seconds: float, record: str = "") -> float:
     periods = np.diff(t) * 1e3
     rate = (len(t) - 1) / (t[-1] - t[0])
     print(f"1000 Hz, all outputs{', recording' if record else ''}, one external subscriber, "
+          f"{' '.join(NODE_ARGS[1::2]) or 'preset string model'}, "
           f"{seconds:g} s: achieved "
           f"{rate:.1f} Hz ({100 * rate / 1000:.2f} %), received period p50 "
           f"{np.percentile(periods, 50):.3f} ms, p99 {np.percentile(periods, 99):.3f} ms; "
@@ -135,7 +139,11 @@ def max_speed(node, rate_hz: float, seconds: float = 10.0) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--seconds", type=float, default=30.0)
+    parser.add_argument("--string-model", choices=("lumped", "distributed"), default=None)
+    parser.add_argument("--rate-only", action="store_true")
     args = parser.parse_args()
+    if args.string_model:
+        NODE_ARGS.extend(["-p", f"string_model:={args.string_model}"])
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     rclpy.init()
@@ -144,6 +152,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         recording = rate_and_cpu(node, args.seconds, record=f"{tmp}/bag")
     print(f"CPU added by in-node recording: {100 * (recording - plain):.1f} % of one core")
+    if args.rate_only:
+        node.destroy_node()
+        rclpy.shutdown()
+        return
     latency(node)
     with tempfile.TemporaryDirectory() as tmp:
         latency(node, record=f"{tmp}/bag")

@@ -1,7 +1,10 @@
 """The numba stepper of the distributed string: the lumped kernel's bit, a string of delay lines.
 
-Each step h: (1) read the Riemann invariants arriving at every junction this step (ring-buffer
-slot ``steps mod N`` of each segment: what left its other end N steps ago); (2) step the BHA
+Each step h: (1) read the Riemann invariants arriving at every junction this step: a segment
+of travel time (N + f) h keeps the last N + 1 departures (slot ``steps mod (N + 1)``), and what
+arrives is the mean over the step of what left its other end (N + f) h earlier, the departures
+of N and N + 1 steps ago weighted 1 - f and f (exact for step means; the weighting dissipates
+h f (1 - f) (x_N - x_N+1)^2 / (4 z), booked as the transport loss); (2) step the BHA
 and the bit exactly as the lumped kernel does (the same inline laws ``_bit_rock_law``,
 ``_surface_at``, ``_first_swept_node``, ``_blade_height``, ``_accumulate``, switches located
 and the step split there), with the string torque C (phi_td - phi) replaced by the pipe's
@@ -48,22 +51,31 @@ from .kernel import (
 # surface torque at the top of the string)
 X_T_BOTTOM, X_F_BOTTOM, X_V_TOP, X_F_TOP, X_DOM, X_DV, X_A_PREV = range(kn.NX, kn.NX + 7)
 NXD = kn.NX + 7
-# extra accumulators: dashpot dissipation, torsional [C] and axial [F* L*]
-A_DAMPED_ROT, A_DAMPED_AX = kn.NA, kn.NA + 1
-NAD = kn.NA + 2
+# extra accumulators: dashpot dissipation, torsional [C] and axial [F* L*]; the energy the
+# transport's weighting of two departures dissipates, likewise
+A_DAMPED_ROT, A_DAMPED_AX, A_LOSS_ROT, A_LOSS_AX = range(kn.NA, kn.NA + 4)
+NAD = kn.NA + 4
 # extra output columns: pipe torque and force on the BHA, top axial speed and force
 O_T_BOTTOM, O_F_BOTTOM, O_V_TOP, O_F_TOP = range(kn.NO, kn.NO + 4)
 NOD = kn.NO + 4
 
 
 @njit(cache=True, inline="always")
-def _arrivals(buf, off, n_seg, slot_of, k, a_in, b_in):
-    """Invariants arriving this step: a at each segment's bottom, b at its top."""
+def _arrivals(buf, off, n_seg, frac, z, slot_of, k, a_in, b_in):
+    """Invariants arriving this step: a at each segment's bottom, b at its top (``n_seg``: the
+    slots per direction, N + 1); returns the transport loss's rate (times h: its energy)."""
+    loss = 0.0
     for j in range(n_seg.size):
-        slot = k % n_seg[j]
-        slot_of[j] = slot
-        a_in[j] = buf[off[j] + slot]
-        b_in[j] = buf[off[j] + n_seg[j] + slot]
+        m, f = n_seg[j], frac[j]
+        old = k % m
+        new = old + 1 if old + 1 < m else 0
+        slot_of[j] = old
+        a0, a1 = buf[off[j] + old], buf[off[j] + new]
+        b0, b1 = buf[off[j] + m + old], buf[off[j] + m + new]
+        a_in[j] = a1 + f * (a0 - a1)
+        b_in[j] = b1 + f * (b0 - b1)
+        loss += f * (1.0 - f) * ((a1 - a0) ** 2 + (b1 - b0) ** 2) / (4.0 * z[j])
+    return loss
 
 
 @njit(cache=True, inline="always")
@@ -84,8 +96,8 @@ def _junctions(buf, off, n_seg, z, c, slot_of, a_in, b_in, top_speed, bottom_spe
 
 
 @njit(cache=True)
-def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abuf, scratch,
-            slots, n_steps, out, out_every, out_row):
+def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, toff, tbuf, az, an, af, ac, aoff, abuf,
+            scratch, slots, n_steps, out, out_every, out_row):
     """Advance ``n_steps`` steps; rows every ``out_every`` steps (the lumped kernel's columns,
     then O_T_BOTTOM.. if ``out`` has them); return the next free row. A step that would turn
     the bit more than a sector is refused (K_REFUSED = 1), as in the lumped kernel."""
@@ -109,6 +121,7 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
     a_w, a_tob = acc[kn.A_W], acc[kn.A_T]
     work_w, work_h = acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST]
     damp_r, damp_a = acc[A_DAMPED_ROT], acc[A_DAMPED_AX]
+    loss_r, loss_a = acc[A_LOSS_ROT], acc[A_LOSS_AX]
     ts_top = x[kn.X_TS]
     # the top drive (kinematic: the ideal speed source omega0)
     mode = np.int64(p[kn.P_MODE])
@@ -124,8 +137,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
     if not drive:
         om_td = om0
     for _ in range(n_steps):
-        _arrivals(tbuf, toff, tn, tslot, steps, ta_in, tb_in)
-        _arrivals(abuf, aoff, an, aslot, steps, aa_in, ab_in)
+        lr = _arrivals(tbuf, toff, tn, tf, tz, tslot, steps, ta_in, tb_in)
+        la = _arrivals(abuf, aoff, an, af, az, aslot, steps, aa_in, ab_in)
         a_t, a_a = ta_in[mt - 1], aa_in[ma - 1]
         rate = (a_t - a_prev) / h          # the bottom torque's rate while the bit is held
         # the top: speed imposed or the drive's inertia under its motor torque; hook force w0
@@ -210,6 +223,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
                                  om_int / h)
         damp_a += h * _junctions(abuf, aoff, an, az, ac, aslot, aa_in, ab_in, v_top, v_int / h)
         work_td += h * ts_top * om_top
+        loss_r += h * lr
+        loss_a += h * la
         work_w += h * w0 * v_top
         work_h += h * (f_top - w0) * v_top
         ptd += h * om_top
@@ -255,4 +270,5 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
     _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, work_td)
     acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST] = work_w, work_h
     acc[A_DAMPED_ROT], acc[A_DAMPED_AX] = damp_r, damp_a
+    acc[A_LOSS_ROT], acc[A_LOSS_AX] = loss_r, loss_a
     return out_row

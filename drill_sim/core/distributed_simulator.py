@@ -23,11 +23,13 @@ from .top_drive import DriveGroups
 
 
 class _Line:
-    """The arrays of one wave line: impedances, ring-buffer lengths and offsets, dashpots."""
+    """The arrays of one wave line: impedances, ring buffers (N + 1 slots per direction for a
+    travel time of (N + f) steps), their offsets, the fractions f, dashpots."""
 
     def __init__(self, line: WaveLine) -> None:
         self.z = np.ascontiguousarray(line.z, dtype=np.float64)
-        self.n = np.ascontiguousarray(line.steps, dtype=np.int64)
+        self.n = np.ascontiguousarray(line.steps + 1, dtype=np.int64)
+        self.f = np.ascontiguousarray(line.frac, dtype=np.float64)
         self.c = np.ascontiguousarray(line.dashpot, dtype=np.float64)
         self.off = np.concatenate([[0], np.cumsum(2 * self.n)[:-1]]).astype(np.int64)
         self.buf = np.zeros(int(2 * self.n.sum()))
@@ -44,12 +46,16 @@ class _Line:
                 below += self.c[j - 1] * speed
         return below
 
-    def energy(self, h: float) -> float:
-        """Energy in the line: h sum (a^2 + b^2)/(4 z) over every slot."""
+    def energy(self, h: float, steps: int) -> float:
+        """Energy in transit after ``steps`` steps: h (a^2 + b^2)/(4 z) of every departure still
+        on its way, the oldest (slot ``steps`` mod (N + 1)) for the fraction f of it."""
         total = 0.0
         for j in range(self.n.size):
             o, m = self.off[j], self.n[j]
-            total += float(np.sum(self.buf[o:o + 2 * m] ** 2)) / (4.0 * self.z[j])
+            oldest = steps % m
+            e = float(np.sum(self.buf[o:o + 2 * m] ** 2))
+            e -= (1.0 - self.f[j]) * (self.buf[o + oldest] ** 2 + self.buf[o + m + oldest] ** 2)
+            total += e / (4.0 * self.z[j])
         return h * total
 
 
@@ -129,7 +135,7 @@ class StringSimulator(Simulator):
     def advance_into(self, n_steps: int, out: np.ndarray, every: int, row: int) -> int:
         t, a = self._t, self._a
         row = int(dk.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
-                             t.z, t.n, t.c, t.off, t.buf, a.z, a.n, a.c, a.off, a.buf,
+                             t.z, t.n, t.f, t.c, t.off, t.buf, a.z, a.n, a.f, a.c, a.off, a.buf,
                              self._scratch, self._slots, n_steps, out, every, row))
         if self._k[kn.K_REFUSED]:
             self._refuse_step()
@@ -159,12 +165,18 @@ class StringSimulator(Simulator):
         drive's, j Omega_TD^2 / 2."""
         x = self._x
         drive = 0.0 if self.drive.mode == "kinematic" else 0.5 * self.drive.j * x[kn.X_OMEGA_TD]**2
-        return (self._t.energy(self.dt) + 0.5 * x[kn.X_OMEGA] ** 2 + drive,
-                self._a.energy(self.dt) + 0.5 * x[kn.X_V] ** 2 / self.groups.psi)
+        return (self._t.energy(self.dt, self.steps) + 0.5 * x[kn.X_OMEGA] ** 2 + drive,
+                self._a.energy(self.dt, self.steps) + 0.5 * x[kn.X_V] ** 2 / self.groups.psi)
 
     def damped(self) -> tuple[float, float]:
         """Energy the dashpots dissipated over the window (torsional [C], axial [F* L*])."""
         return float(self._acc[dk.A_DAMPED_ROT]), float(self._acc[dk.A_DAMPED_AX])
+
+    def transport_loss(self) -> tuple[float, float]:
+        """Energy the transport's weighting of two departures (a fractional travel time)
+        dissipated over the window (torsional [C], axial [F* L*]): second order in h for
+        smooth waves, O(h) per passage of a jump (a stick, a landing)."""
+        return float(self._acc[dk.A_LOSS_ROT]), float(self._acc[dk.A_LOSS_AX])
 
 
 def line_c_last(waves: StringWaves) -> float:

@@ -29,8 +29,9 @@ from .stability import SteadyState, steady_state, winding_number
 
 
 def simulated(line: WaveLine) -> WaveLine:
-    """The line with the delays the simulation uses (steps * h), for comparisons at 1e-3."""
-    return WaveLine(line.z, line.steps * line.h, line.steps, line.dashpot, line.h)
+    """The line with the delays the simulation uses ((steps + frac) h: the geometry's, but
+    for segments shorter than a step), for comparisons at 1e-3."""
+    return WaveLine(line.z, line.simulated_delay, line.steps, line.dashpot, line.h, line.frac)
 
 
 def characteristic(s: np.ndarray | complex, groups: Groups, steady: SteadyState,
@@ -124,7 +125,7 @@ def natural_frequencies(waves: StringWaves, psi: float, count: int = 3,
     motor torque (T_top = -j s^2 phi_top, the BHA s^2 phi_bit = T_bit):
     s^2 (m11 - j s^2 m12) - (m21 - j s^2 m22), whose j -> inf limit is the former."""
     def lossless(line: WaveLine) -> WaveLine:
-        return WaveLine(line.z, line.delay, line.steps, 0.0 * line.dashpot, line.h)
+        return WaveLine(line.z, line.delay, line.steps, 0.0 * line.dashpot, line.h, line.frac)
 
     tor, ax = lossless(waves.torsion), lossless(waves.axial)
 
