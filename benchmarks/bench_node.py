@@ -13,7 +13,12 @@ in torque mode and the benchmark closing the loop like a controller: for every
 ~/top_drive/twist it receives it publishes a motor torque on ~/cmd/top_drive_torque (a PI on
 the top-drive speed, 60 rpm), so the node takes a command every tick.
 
+With --sensor-profile NAME every node runs that sensor profile (msg_docs/sensors.md);
+--string-model lumped|distributed sets every node's string_model; --rate-only prints only
+the 1000 Hz rate and CPU.
+
 Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30] [--top-drive-mode torque]
+         [--sensor-profile NAME] [--string-model distributed] [--rate-only]
 """
 
 from __future__ import annotations
@@ -35,6 +40,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 BIN = Path(sys.executable).parent
+NODE_ARGS: list[str] = []       # parameters every node started here gets (sensors, string)
 
 
 def cpu_seconds(pid: int) -> float:
@@ -43,7 +49,7 @@ def cpu_seconds(pid: int) -> float:
 
 
 def start(*args: str) -> subprocess.Popen:
-    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *args],
+    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *NODE_ARGS, *args],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
@@ -114,7 +120,7 @@ def rate_and_cpu(node, seconds: float, record: str = "", mode: str = "kinematic"
     loop = (f", top drive in torque mode, {controller.sent / seconds:.0f} torque commands/s "
             "back" if controller is not None else "")
     print(f"1000 Hz, all outputs{', recording' if record else ''}, one external subscriber"
-          f"{loop}, {seconds:g} s: achieved "
+          f"{loop}, {' '.join(NODE_ARGS[1::2])}, {seconds:g} s: achieved "
           f"{rate:.1f} Hz ({100 * rate / 1000:.2f} %), received period p50 "
           f"{np.percentile(periods, 50):.3f} ms, p99 {np.percentile(periods, 99):.3f} ms; "
           f"tick period p99 in the node per 1 s window: median {np.median(p99s):.3f} ms, "
@@ -180,7 +186,13 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--top-drive-mode", choices=("kinematic", "torque"),
                         default="kinematic")
+    parser.add_argument("--sensor-profile", default="ideal")
+    parser.add_argument("--string-model", choices=("lumped", "distributed"), default=None)
+    parser.add_argument("--rate-only", action="store_true")
     args = parser.parse_args()
+    NODE_ARGS.extend(["-p", f"sensor_profile:={args.sensor_profile}"])
+    if args.string_model:
+        NODE_ARGS.extend(["-p", f"string_model:={args.string_model}"])
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     rclpy.init()
@@ -194,9 +206,17 @@ def main() -> None:
         rclpy.shutdown()
         return
     plain = rate_and_cpu(node, args.seconds)
+    if args.rate_only:
+        node.destroy_node()
+        rclpy.shutdown()
+        return
     with tempfile.TemporaryDirectory() as tmp:
         recording = rate_and_cpu(node, args.seconds, record=f"{tmp}/bag")
     print(f"CPU added by in-node recording: {100 * (recording - plain):.1f} % of one core")
+    if args.rate_only:
+        node.destroy_node()
+        rclpy.shutdown()
+        return
     latency(node)
     with tempfile.TemporaryDirectory() as tmp:
         latency(node, record=f"{tmp}/bag")
