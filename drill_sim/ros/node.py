@@ -40,7 +40,9 @@ from .stopping import init_stoppable
 from .topics import message_class, rclpy_qos, service_class
 
 SWITCH_INTERVAL_S = 5e-4
-SERVE_PERIOD_S = 1e-3        # max speed and lockstep: services, parameters, diagnostics
+SERVE_PERIOD_S = 1e-3        # max speed: services, parameters, diagnostics served this often
+# lockstep: served this often [s] (a spin of the executor costs ~0.1 ms, a third of a tick)
+LOCKSTEP_SERVE_PERIOD_S = 0.02
 
 
 class RigNode(Node):
@@ -60,6 +62,7 @@ class RigNode(Node):
         self.with_clock = bool(self.p["publish_clock"])
         self._enc = RigEncoders(self.with_clock)
         self._outputs = [self._publisher(t) for t in self._enc.topics]
+        self._live = [True] * len(self._outputs)  # back to back: outputs with a subscriber
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
         self.commands = CommandInbox(self, self.p["qos_reliability"])
         self.superseded = 0                      # commands replaced within their tick
@@ -156,24 +159,33 @@ class RigNode(Node):
         lockstep the rig then waits for this tick's commands."""
         stamp = self.stamp_ns()
         self._last_data = data = self._enc.sample(stamp, s)
-        for pub, raw in zip(self._outputs, data, strict=True):
-            pub.publish(raw)
+        for pub, raw, live in zip(self._outputs, data, self._live, strict=True):
+            if live:
+                pub.publish(raw)
         if self.recorder is not None:
             self.recorder.record_outputs(data)
         if self.lockstep is not None:
             self.lockstep.wait_for(stamp, time.monotonic())
 
+    def serve(self, executor: EventsExecutor) -> None:
+        """Between back-to-back ticks: services, parameters and diagnostics; and which outputs
+        have a subscriber now (the others are not published until they have one: a publish
+        to no one costs ~6 us, nine of them a fifth of a lockstep tick; all are recorded)."""
+        executor.spin_once(timeout_sec=0.0)
+        self._live = [p.get_subscription_count() > 0 for p in self._outputs]
+
     # ---- lockstep ----------------------------------------------------------------------
     def run_lockstep(self, executor: EventsExecutor, stop) -> None:
         """Publish a tick, wait for a command stamped with its time on every lockstep topic
         (blocked in the middleware: no CPU spent), advance one tick, and so on; services,
-        parameters and diagnostics are served once per wall millisecond and while paused."""
+        parameters and diagnostics are served every LOCKSTEP_SERVE_PERIOD_S and while paused."""
         ls = self.lockstep
         next_serve = 0.0
         while not stop:
             if self.paused:
                 executor.spin_once(timeout_sec=SERVE_PERIOD_S)
                 self.take_commands()             # still taken and held while paused
+                next_serve = 0.0
                 continue
             if ls.stamp_ns is None:              # tick 0, once running
                 self.publish_sample(self.rig.sample())
@@ -189,8 +201,8 @@ class RigNode(Node):
                     self._lockstep_overdue(now)
                 self.commands.wait(min(max(next_serve - now, 0.0), ls.until_overdue(now)))
             if now >= next_serve:
-                executor.spin_once(timeout_sec=0.0)
-                next_serve = now + SERVE_PERIOD_S
+                self.serve(executor)
+                next_serve = now + LOCKSTEP_SERVE_PERIOD_S
 
     def _lockstep_overdue(self, now: float) -> None:
         """The tick waited ``lockstep_timeout_s``: say for what, and publish it again (not
@@ -201,7 +213,7 @@ class RigNode(Node):
             f"{st.stamp_ns * 1e-9:.6f} s on {', '.join(st.missing)}; publishing that tick "
             "again and waiting on (the rig never advances without its controller)")
         for pub, raw in zip(self._outputs, self._last_data, strict=True):
-            pub.publish(raw)
+            pub.publish(raw)                     # to every output: subscribers may be new
 
     # ---- commands ----------------------------------------------------------------------
     def take_commands(self) -> None:
@@ -366,8 +378,8 @@ def main(args: list[str] | None = None) -> int:
                 if node.paused:
                     executor.spin_once(timeout_sec=1e-3)
                 elif now >= next_spin:
-                    executor.spin_once(timeout_sec=0.0)
-                    next_spin = now + 1e-3
+                    node.serve(executor)
+                    next_spin = now + SERVE_PERIOD_S
         else:
             while not stop:
                 executor.spin_once(timeout_sec=0.1)
