@@ -9,6 +9,7 @@ last answer; the figure is that over the ticks, with the CPU both processes used
 The machine's other load enters the figure: say how loaded it was.
 
 Run: .venv/bin/python benchmarks/bench_lockstep.py [--ticks 5000] [--record] [--repeat 3]
+         [--executor events|single]   (the controller's rclpy executor)
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ def _cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def run_once(ticks: int, record: Path | None) -> tuple[float, float, float]:
+def run_once(ticks: int, record: Path | None, executor: str) -> tuple[float, float, float]:
     """(wall ms, node CPU ms, controller CPU ms) per lockstep tick."""
     args = [str(BIN / "drill_sim_node"), "--ros-args", "-r", f"__ns:={NS}",
             "-p", "publish_clock:=true", "-p", "lockstep:=true", "-p", "start_paused:=true"]
@@ -41,7 +42,8 @@ def run_once(ticks: int, record: Path | None) -> tuple[float, float, float]:
     node = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         ctl = subprocess.Popen([sys.executable, str(CONTROLLER), "--rig", f"{NS}/drill_sim",
-                                "--ticks", str(ticks), "--resume"], stdout=subprocess.PIPE,
+                                "--ticks", str(ticks), "--resume", "--executor", executor],
+                               stdout=subprocess.PIPE,
                                text=True)
         cpu_node0 = None
         for line in ctl.stdout:
@@ -66,16 +68,18 @@ def main() -> None:
     parser.add_argument("--ticks", type=int, default=5000)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--record", action="store_true", help="the node records its bag too")
+    parser.add_argument("--executor", choices=("events", "single"), default="events")
     args = parser.parse_args()
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 230)))
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     print(f"lockstep, 1000 Hz, one PI controller in another process, {args.ticks} ticks"
-          f"{', recording' if args.record else ''}; load average "
+          f"{', recording' if args.record else ''}, controller executor {args.executor}; "
+          "load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.repeat):
             bag = Path(tmp) / f"run{k}" if args.record else None
-            wall, node_cpu, ctl_cpu = run_once(args.ticks, bag)
+            wall, node_cpu, ctl_cpu = run_once(args.ticks, bag, args.executor)
             print(f"run {k + 1}: {wall:.3f} ms wall a tick (target <= 0.3 ms), CPU "
                   f"{node_cpu:.3f} ms node + {ctl_cpu:.3f} ms controller a tick; "
                   f"{1.0 / wall:.2f} x real time")
