@@ -5,6 +5,8 @@ run-time parameter changes (``<node>/events``) and every sample it published, in
 happened. The re-run starts the same rig (``core.session``), then walks the bag in that order:
 each command is accepted or refused by the node's rules, each event is redone, and before each
 recorded joint_states sample the model is advanced to that sample's step and compared with it.
+The sensors (``core.sensors``, the recorded profile and seed) measure each re-run sample as the
+node did, and the ``~/measured/`` messages that follow are compared with their reading.
 The model is deterministic and the node only advances it between samples, so the re-run is
 exact in both modes: in sim-time mode the ticks are fixed steps of simulated time; in
 real-time mode they came from the wall clock, and the re-run takes them from the stamps.
@@ -21,13 +23,16 @@ from functools import partial
 from pathlib import Path
 
 from ..core import NoSteadyDrilling, ParameterError, session
-from ..core.rig import Rig, RigSample
+from ..core.rig import Rig
+from ..core.sensor_profile import profile_from_dict
+from ..core.sensors import Measured, SensorBank, session_sensors
 from ..wire import cdr, rig_topics
 from .bag import Bag, opened
 from .errors import BagError
 from .series import JOINT_ARRAY_START, JOINT_FIELDS, JOINT_VALUES_F64, joint_state_layout
 
 _STAMP = struct.Struct("<iI")
+MOTOR_TORQUE = "motor_torque_nm"            # compared from ~/top_drive/motor_wrench when recorded
 _JOINT_VALUES = struct.Struct(f"<{JOINT_VALUES_F64}d")
 
 
@@ -44,7 +49,7 @@ class ResimResult:
     refused: int = 0
     events: list[str] = field(default_factory=list)
     max_difference: dict[str, float] = field(
-        default_factory=lambda: dict.fromkeys(JOINT_FIELDS, 0.0))
+        default_factory=lambda: dict.fromkeys((*JOINT_FIELDS, MOTOR_TORQUE), 0.0))
     worst: tuple[str, float, float] = ("", 0.0, 0.0)
     problems: list[str] = field(default_factory=list)
 
@@ -105,15 +110,23 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
                          meta["session"].get("preset", "?"))
     try:
         # the step the node used; bags from before it was recorded ran at dt_s itself
-        rig = session.make_rig(p, float(meta["session"].get("step_s", p["dt_s"])))
+        geometry = session.geometry_from_record(meta["string"]) if "string" in meta else None
+        rig = session.make_rig(p, float(meta["session"].get("step_s", p["dt_s"])), geometry)
         session.start(rig, p)
-    except (ParameterError, NoSteadyDrilling, KeyError) as exc:
+        recorded = meta.get("sensors", {})
+        sensors = session_sensors(p, rig.dt_s, profile_from_dict(
+            recorded.get("name", "recorded"), json.loads(recorded["profile"]))
+            if "profile" in recorded else None)
+    except (ParameterError, NoSteadyDrilling, KeyError, ValueError) as exc:
         raise BagError(f"bag {bag.path}: the recorded parameters do not make a rig: {exc}") \
             from None
-    run = _Rerun(rig, p, epoch_ns, result)
+    run = _Rerun(rig, p, epoch_ns, result, sensors)
     total = max(found.topics[topics["joints"]].count, 1)
-    handlers = {topics["joints"]: run.sample, topics["events"]: run.event}
+    handlers = {topics["joints"]: run.sample, topics["events"]: run.event,
+                rig_topics.topic("~/top_drive/motor_wrench").under(node): run.motor}
     handlers.update({t.under(node): partial(run.command, t.command) for t in rig_topics.COMMANDS})
+    handlers.update({t.under(node): partial(run.measured, t)
+                     for t in rig_topics.MEASURED_OUTPUTS if t.under(node) in found.topics})
     walked: list[str] = []
     for m in bag.messages(set(handlers), walked):
         handlers[m.topic](m.data)
@@ -126,36 +139,64 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
 class _Rerun:
     """The rig being re-run and the session state the node kept beside it."""
 
-    def __init__(self, rig: Rig, p: dict, epoch_ns: int, result: ResimResult) -> None:
+    def __init__(self, rig: Rig, p: dict, epoch_ns: int, result: ResimResult,
+                 sensors: SensorBank) -> None:
         self.rig, self.p, self.epoch_ns, self.result = rig, p, epoch_ns, result
+        self.sensors = sensors
+        self.reading: Measured | None = None     # the sensors' reading of the last sample
         self.offset_s = 0.0                      # simulated time before the last reset
         self.values_at: int | None = None        # byte offset of the joint arrays
+        self.types = {t.command: t.type_name for t in rig_topics.COMMANDS}
 
-    def sample(self, data: bytes) -> None:
-        if self.values_at is None:
-            self.values_at = joint_state_layout(data)[1]
+    def _advance(self, data: bytes) -> float:
+        """To the step of a recorded output's stamp; its simulated time [s]."""
         sec, nsec = _STAMP.unpack_from(data, 4)
         sim_time_s = (sec * 1_000_000_000 + nsec - self.epoch_ns) * 1e-9
         step = round((sim_time_s - self.offset_s) / self.rig.dt_s)
         ahead = step - self.rig.steps
         if ahead > 0:
             self.rig.advance_steps(ahead)
+        return sim_time_s
+
+    def sample(self, data: bytes) -> None:
+        if self.values_at is None:
+            self.values_at = joint_state_layout(data)[1]
+        sim_time_s = self._advance(data)
         recorded = _JOINT_VALUES.unpack_from(data, self.values_at)
-        self._compare(self.rig.sample(), recorded, sim_time_s)
+        s = self.rig.sample()
+        for name, (kind, j) in JOINT_FIELDS.items():
+            self._compare(name, getattr(s, name), recorded[JOINT_ARRAY_START[kind] + j],
+                          sim_time_s)
+        self.reading = self.sensors.measure(self.rig.time_s, s)
         self.result.samples += 1
 
-    def _compare(self, s: RigSample, recorded: tuple[float, ...], t: float) -> None:
+    def motor(self, data: bytes) -> None:
+        """A recorded motor torque (published after the tick's joint_states, at its step)."""
+        sim_time_s = self._advance(data)
+        torque_nm = cdr.decode_stamped_vectors(data)[3][5]
+        self._compare(MOTOR_TORQUE, self.rig.motor_torque_nm, torque_nm, sim_time_s)
+
+    def measured(self, t: rig_topics.RigTopic, data: bytes) -> None:
+        """A recorded ~/measured/ message against the sensors' reading of the re-run sample
+        it followed (a message before any sample, or one that cannot be decoded, counts as
+        different)."""
+        values = _measured_values(t, data)
+        for f in t.fields:
+            rerun = getattr(self.reading, f.sample) if self.reading is not None else math.nan
+            self._compare(f"measured {f.sample}", rerun, values.get(f.message, math.nan),
+                          self.offset_s + self.rig.time_s)
+
+    def _compare(self, name: str, rerun: float, recorded: float, t: float) -> None:
         r = self.result
-        for name, (kind, j) in JOINT_FIELDS.items():
-            diff = abs(getattr(s, name) - recorded[JOINT_ARRAY_START[kind] + j])
-            if not diff <= r.max_difference[name]:        # also catches NaN
-                r.max_difference[name] = diff if not math.isnan(diff) else math.inf
-                if r.max_difference[name] > r.worst[1]:
-                    r.worst = (name, r.max_difference[name], t)
+        diff = abs(rerun - recorded)
+        if not diff <= r.max_difference.setdefault(name, 0.0):      # also catches NaN
+            r.max_difference[name] = diff if not math.isnan(diff) else math.inf
+            if r.max_difference[name] > r.worst[1]:
+                r.worst = (name, r.max_difference[name], t)
 
     def command(self, name: str, data: bytes) -> None:
         """A recorded command, accepted or refused by the node's own rule."""
-        frame, _, _, six = cdr.decode_stamped_vectors(data)
+        frame, _, _, six = cdr.decode_command(self.types[name], data)
         if session.apply_command(self.rig, self.p, name, frame, six) is None:
             self.result.commands += 1
         else:
@@ -168,6 +209,7 @@ class _Rerun:
         if kind == "reset":
             self.offset_s += self.rig.time_s
             session.start(self.rig, self.p)
+            self.sensors.reset()
         elif kind == "parameters":
             new = dict(self.p)
             new.update({k: session.parse_value(v) for k, v in event["values"].items()})
@@ -175,3 +217,13 @@ class _Rerun:
             self.p = new
         self.result.events.append(kind)
 
+
+def _measured_values(t: rig_topics.RigTopic, data: bytes) -> dict[str, float]:
+    """The float64 fields of a recorded ~/measured/ message by path ({} if undecodable)."""
+    try:
+        if t.type_name in cdr.VECTOR_FIELDS:
+            six = cdr.decode_stamped_vectors(data)[3]
+            return dict(zip(cdr.VECTOR_FIELDS[t.type_name], six, strict=True))
+        return {"data": struct.unpack_from("<d", data, 4)[0]}
+    except (cdr.WireError, struct.error):
+        return {}

@@ -30,6 +30,7 @@ from ..core.diagnostics import CommandCounts, rig_status
 from ..core.lockstep import Lockstep
 from ..core.pacing import Pacer
 from ..core.rig import RigSample
+from ..core.sensors import session_sensors
 from ..wire import rig_topics
 from ..wire.rig_messages import RigEncoders
 from ..wire.rig_topics import RigTopic
@@ -52,8 +53,9 @@ class RigNode(Node):
         super().__init__(rig_topics.NODE_NAME, **kwargs)
         try:
             self.preset, self._specs, self.p = parameters.declare(self)
-            self.rig = session.make_rig(self.p)
+            self.rig = session.make_rig(self.p, geometry=self.preset.string)
             session.start(self.rig, self.p)
+            self.sensors = session_sensors(self.p, self.rig.dt_s)   # what ~/measured/ shows
         except (ParameterError, NoSteadyDrilling) as exc:
             raise SystemExit(f"drill_sim_node: {exc}") from None
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -82,7 +84,7 @@ class RigNode(Node):
             p=self.p, rig=self.rig, preset=self.preset.name,
             node=self.get_fully_qualified_name(), resolve=self.resolve_topic_name,
             stamp_epoch_ns=0 if self.with_clock else self._epoch_ns,
-            logger=self.get_logger()) if self.p["record"] else None
+            logger=self.get_logger(), sensors=self.sensors.profile) if self.p["record"] else None
         self.pacer = Pacer(self.p["rate_hz"], self.p["real_time_factor"],
                            self._back_to_back(self.p), self.p["diagnostics_period_s"],
                            self.rig.time_s)
@@ -95,7 +97,8 @@ class RigNode(Node):
             f"rig '{self.preset.name}' ready: t* = {self.rig.scales.time_s:.3f} s, "
             f"dt = {self.rig.dt_s:.4g} s ({self._steps_per_tick} a tick), {self.p['rate_hz']:g} "
             f"Hz, {self._pace_words()}, "
-            f"{'publishing /clock' if self.with_clock else 'wall-clock stamps'}"
+            f"{'publishing /clock' if self.with_clock else 'wall-clock stamps'}, sensors "
+            f"'{self.sensors.profile.name}' (seed {self.sensors.seed})"
             f"{', paused' if self.paused else ''}")
         self.get_logger().info(f"rig figures: {session.figures_line(self.rig.params)}")
 
@@ -155,10 +158,11 @@ class RigNode(Node):
         return True
 
     def publish_sample(self, s: RigSample) -> None:
-        """Encode the sample once; publish those bytes and record the very same bytes. In
-        lockstep the rig then waits for this tick's commands."""
+        """Measure the sample, encode both once; publish those bytes and record the very same
+        bytes. In lockstep the rig then waits for this tick's commands."""
         stamp = self.stamp_ns()
-        self._last_data = data = self._enc.sample(stamp, s)
+        self._last_data = data = self._enc.sample(stamp, s,
+                                                  self.sensors.measure(self.rig.time_s, s))
         for pub, raw, live in zip(self._outputs, data, self._live, strict=True):
             if live:
                 pub.publish(raw)
@@ -257,6 +261,7 @@ class RigNode(Node):
         if self.recorder is not None:
             self.recorder.record_event("reset", self.sim_time_s)
         self._offset_s = offset
+        self.sensors.reset()
         self.pacer.reset(self.rig.time_s)
         self.publish_sample(self.rig.sample())
         response.success = True
