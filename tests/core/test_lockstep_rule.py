@@ -12,6 +12,8 @@ from drill_sim.core.diagnostics import OK, WARN, rig_status
 from drill_sim.core.lockstep import Lockstep
 from drill_sim.core.pacing import TickStats
 from drill_sim.core.rig import Rig
+from drill_sim.ros.parameter_table import specs
+from drill_sim.wire import rig_topics
 
 TOP, HOOK = "~/cmd/top_drive", "~/cmd/hook_load"
 QUIET = {"ssi": 0.0, "stick_fraction": 0.0, "bounce_fraction": 0.0}
@@ -77,3 +79,17 @@ def test_diagnostics_count_and_flag_stalled_real_time_ticks(steady):
     calm = TickStats(ticks=1000, wall_s=1.0, sim_s=1.0, period_p99_s=1.1e-3, overruns=7,
                      period_max_s=1.2e-3, stalls=0, longest_stall_s=30e-3)
     assert rig_status(steady, QUIET, calm, **RUNNING, max_speed=False).level == OK
+
+
+def test_lockstep_topics_are_the_tables_command_topics():
+    spec = next(s for s in specs(load_preset("base")) if s.name == "lockstep_topics")
+    names = [t.name[2:] for t in rig_topics.COMMANDS]
+    assert "cmd/top_drive_torque" in names
+    assert spec.check(["cmd/top_drive_torque"]) == (["cmd/top_drive_torque"], None)
+    assert spec.check(["~/cmd/top_drive", "cmd/hook_load"]) == (
+        ["cmd/top_drive", "cmd/hook_load"], None)
+    assert spec.check("cmd/top_drive") == (["cmd/top_drive"], None)
+    for bad in (["cmd/nope"], [], ["cmd/top_drive", "cmd/top_drive"], [3], "bit/wrench"):
+        why = spec.check(bad)[1]
+        assert why == (f"lockstep_topics = {bad!r}: expected a list of one or more of "
+                       f"{', '.join(names)}, each once"), why
