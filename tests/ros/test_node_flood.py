@@ -17,9 +17,9 @@ from sensor_msgs.msg import JointState
 
 RIG = "/flood/drill_sim"
 FLOOD = 100_000                 # commands per topic
-MAX_GAP_S = 0.5                 # between outputs received, on a busy 2-core machine
-# (measured ~10 ms, also beside a busy loop; 0.7-1.5 s when commands were dispatched
-# one event each; the 20 ms figure is benchmarks/bench_flood.py's)
+MAX_GAP_S = 1.0                 # between outputs received, on a busy 2-core machine
+# (measured ~10 ms, also beside a busy loop, 0.68 s once at load average 10; 1.5-1.6 s when
+# commands were dispatched one event each; the 20 ms figure is benchmarks/bench_flood.py's)
 
 
 def test_a_flood_of_commands_does_not_stop_the_outputs(ros):
