@@ -21,6 +21,7 @@ from ..control.evaluation import (
     build_law,
     law_top_drive,
     run_loop,
+    sensor_profiles,
 )
 from ..control.reference import reference_gains
 from ..control.scenarios import SETS, named
@@ -28,11 +29,10 @@ from ..core import load_preset
 from ..core.distributed import STRING_MODELS
 from ..terminal import Progress
 from .case import RPM_MAX
-from .checks import in_range, json_line, number, output_file, plot_file
+from .checks import in_range, json_line, number, output_file, plot_file, whole
 from .errors import UsageError
 
 DEFAULT_LAWS = ("kinematic", "stiff_pi", "soft_speed", "z_torque")
-SENSOR_PROFILES = ("ideal",)
 # (JSON/CSV key, table heading, format, unit)
 COLUMNS = (
     ("ssi", "SSI", "{:6.3f}", "-"),
@@ -88,8 +88,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--motor-torque-min-knm", type=number, default=None,
                         help="its smallest [kN m], -1000 to 0 (0: cannot brake); default the "
                              "preset's (base -60)")
-    parser.add_argument("--sensor-profile", choices=SENSOR_PROFILES, default="ideal",
-                        help="what the controller measures; default ideal")
+    parser.add_argument("--sensor-profile", choices=sensor_profiles(), default="ideal",
+                        help="what the controller measures (msg_docs/sensors.md); default ideal")
+    parser.add_argument("--sensor-seed", type=int, default=0,
+                        help="seed of the sensors' noise, >= 0; default 0")
     parser.add_argument("--string-model", choices=STRING_MODELS, default="lumped",
                         help="the string model; default lumped")
     parser.add_argument("--out", type=Path, help="the table as .csv or .json")
@@ -119,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
             law, preset, drive.top_drive_inertia_kg_m2)
         law_gains.update(gains.get(law, {}))
         one = LoopSettings(law=law, gains=law_gains, sample_period_s=h, top_drive=drive,
-                           string_model=args.string_model, sensor_profile=args.sensor_profile)
+                           string_model=args.string_model, sensor_profile=args.sensor_profile,
+                           sensor_seed=whole("--sensor-seed", args.sensor_seed, 0, 2**63 - 1))
         build_law(preset, one, law_top_drive(preset, law, drive))   # bad gains: before any run
         settings.append(one)
     progress = Progress("drill_sim control")
@@ -212,6 +215,7 @@ def _document(args: argparse.Namespace, preset_name: str, drive, h: float,
               results: list[LoopResult]) -> dict:
     rows = [{"name": r.law, **r.row()} for r in results]
     return {"preset": preset_name, "sample_period_s": h, "sensor_profile": args.sensor_profile,
+            "sensor_seed": args.sensor_seed,
             "string_model": args.string_model,
             "tuning": "published" if args.published_gains else "reference",
             "top_drive": {"top_drive_inertia_kg_m2": drive.top_drive_inertia_kg_m2,

@@ -41,6 +41,35 @@ def ideal_measurement(sample: RigSample) -> SurfaceMeasurement:
                               sample.motor_torque_nm, sample.surface_torque_nm)
 
 
+def sensor_profiles() -> list[str]:
+    """The sensor profiles a loop can measure through (``ideal`` alone before the core's
+    sensor model exists)."""
+    try:
+        from ..core.sensor_profile import profile_names
+    except ImportError:
+        return ["ideal"]
+    return profile_names()
+
+
+def sensor_measurement(profile: str, sample_period_s: float, seed: int = 0) -> Measure:
+    """The rig's sensor model (``core.sensors.SensorBank``) called once per controller sample,
+    as the node calls it once per tick: a profile name or YAML path, seeded noise."""
+    if profile == "ideal":
+        return ideal_measurement
+    try:
+        from ..core.sensors import SensorBank
+    except ImportError as exc:
+        raise ParameterError(f"sensor_profile = {profile!r}: this build has no sensor model; "
+                             "expected 'ideal'") from exc
+    bank = SensorBank(profile, sample_period_s, seed)
+
+    def measure(sample: RigSample) -> SurfaceMeasurement:
+        m = bank.measure(sample.time_s, sample)
+        return SurfaceMeasurement(sample.time_s, m.top_drive_speed_rad_s, m.motor_torque_nm,
+                                  m.surface_torque_nm)
+    return measure
+
+
 @dataclass(frozen=True)
 class Scenario:
     """Set-points against time: piecewise-linear (time [s], value) breakpoints, held after the
@@ -100,8 +129,9 @@ class LoopSettings:
     top_drive: TopDriveParameters | None = None     # None: the preset's (torque mode for laws)
     string_model: str = "lumped"
     perturbation: float = DEFAULT_PERTURBATION
-    measure: Measure = ideal_measurement
-    sensor_profile: str = "ideal"                   # the name reported with the result
+    sensor_profile: str = "ideal"                   # ``sensor_profiles()``, or a YAML path
+    sensor_seed: int = 0
+    measure: Measure | None = None                  # overrides the profile (a custom sensor)
 
 
 @dataclass
@@ -162,6 +192,8 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
     h = check_number("sample_period_s", settings.sample_period_s, high=1.0)
     drive = law_top_drive(preset, settings.law, settings.top_drive)
     law = build_law(preset, settings, drive)
+    measure = settings.measure or sensor_measurement(settings.sensor_profile, h,
+                                                     settings.sensor_seed)
     rig = Rig(preset.rig, top_drive=drive, string_model=settings.string_model,
               geometry=preset.string)
     n = math.floor(scenario.duration_s / h + 1e-9)
@@ -180,7 +212,7 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
     law.reset(float(speed_set[0]))
     sample = rig.sample()
     current = rig.commanded_speed_rad_s if speed_law else rig.commanded_motor_torque_nm
-    output = active.bumpless_start(current, settings.measure(sample))
+    output = active.bumpless_start(current, measure(sample))
     names = ("time_s", "bit_speed_rad_s", "top_drive_speed_rad_s", "surface_torque_nm",
              "motor_torque_nm", "law_output", "stuck")
     series = {k: np.empty(n + 1) for k in names}
@@ -197,7 +229,7 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
         if k == window_k:
             rig.reset_metrics_window()
         sample = rig.sample()
-        measurement = settings.measure(sample)
+        measurement = measure(sample)
         if k == switch_k:
             law.set_speed(float(speed_set[k]))
             output = law.bumpless_start(output, measurement)
