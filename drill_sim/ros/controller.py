@@ -27,7 +27,8 @@ from rcl_interfaces.msg import (
     SetParametersResult,
 )
 from rcl_interfaces.srv import SetParameters
-from rclpy.executors import EventsExecutor, ExternalShutdownException
+from rclpy.executors import ExternalShutdownException
+from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
