@@ -10,13 +10,15 @@ setup(
     name=package_name,
     version="0.1.0",
     packages=find_packages(exclude=["tests", "tests.*", "benchmarks"]),
-    package_data={package_name: ["presets/*.yaml", "scenarios/*.yaml", "config/*.yaml"]},
+    package_data={package_name: ["presets/*.yaml", "scenarios/*.yaml", "config/*.yaml",
+                                 "config/*.json", "config/*.xml"]},
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
         ("share/" + package_name + "/presets", glob("drill_sim/presets/*.yaml")),
         ("share/" + package_name + "/scenarios", glob("drill_sim/scenarios/*.yaml")),
-        ("share/" + package_name + "/config", glob("drill_sim/config/*.yaml")),
+        ("share/" + package_name + "/config", glob("drill_sim/config/*.yaml")
+         + glob("drill_sim/config/*.json") + glob("drill_sim/config/*.xml")),
     ],
     python_requires=">=3.10",
     install_requires=[

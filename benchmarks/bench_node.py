@@ -8,7 +8,12 @@
     sample carrying it received back [p50 <= 1.5 ms, p99 <= 3 ms], without and with recording;
   - max_speed with publish_clock: simulated seconds per wall second [>= 20].
 
-Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30]
+With --top-drive-mode torque: only the 1000 Hz figures (without and with recording), the node
+in torque mode and the benchmark closing the loop like a controller: for every
+~/top_drive/twist it receives it publishes a motor torque on ~/cmd/top_drive_torque (a PI on
+the top-drive speed, 60 rpm), so the node takes a command every tick.
+
+Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30] [--top-drive-mode torque]
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import TwistStamped
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
@@ -48,9 +53,45 @@ def spin(node, seconds: float) -> None:
         rclpy.spin_once(node, timeout_sec=0.001)
 
 
-def rate_and_cpu(node, seconds: float, record: str = "") -> float:
-    ns = "/bench_rec" if record else "/bench"
-    proc = start("-r", f"__ns:={ns}", *(("-p", f"record:={record}") if record else ()))
+class TorqueController:
+    """A PI on the top-drive speed [rad/s] -> motor torque [N m], one command per sample
+    received: the load of a stick-slip controller closing the loop at the node's rate."""
+
+    KP_NM_S_RAD, KI_NM_RAD, SET_RAD_S, DT_S = 15e3, 14.5e3, 2 * np.pi, 1e-3
+
+    def __init__(self, node, ns: str) -> None:
+        self.pub = node.create_publisher(WrenchStamped, f"{ns}/drill_sim/cmd/top_drive_torque",
+                                         10)
+        self.integral_nm: float | None = None
+        self.msg = WrenchStamped()
+        self.msg.header.frame_id = "top_drive"
+        self.sent = 0
+        node.create_subscription(WrenchStamped, f"{ns}/drill_sim/top_drive/motor_wrench",
+                                 self._start, 10)
+        node.create_subscription(TwistStamped, f"{ns}/drill_sim/top_drive/twist",
+                                 self._on_speed, 1000)
+
+    def _start(self, m: WrenchStamped) -> None:
+        if self.integral_nm is None:                 # bumpless: from the torque applied
+            self.integral_nm = m.wrench.torque.z
+
+    def _on_speed(self, m: TwistStamped) -> None:
+        if self.integral_nm is None:
+            return
+        error = self.SET_RAD_S - m.twist.angular.z
+        self.integral_nm += self.KI_NM_RAD * error * self.DT_S
+        self.msg.header.stamp = m.header.stamp
+        self.msg.wrench.torque.z = float(np.clip(self.integral_nm + self.KP_NM_S_RAD * error,
+                                                 -6e4, 6e4))
+        self.pub.publish(self.msg)
+        self.sent += 1
+
+
+def rate_and_cpu(node, seconds: float, record: str = "", mode: str = "kinematic") -> float:
+    ns = ("/bench_rec" if record else "/bench") + ("_torque" if mode == "torque" else "")
+    proc = start("-r", f"__ns:={ns}", "-p", f"top_drive_mode:={mode}",
+                 *(("-p", f"record:={record}") if record else ()))
+    controller = TorqueController(node, ns) if mode == "torque" else None
     arrivals: list[float] = []
     p99s: list[float] = []
     node.create_subscription(JointState, f"{ns}/drill_sim/joint_states",
@@ -70,8 +111,10 @@ def rate_and_cpu(node, seconds: float, record: str = "") -> float:
     t = np.array(arrivals)
     periods = np.diff(t) * 1e3
     rate = (len(t) - 1) / (t[-1] - t[0])
-    print(f"1000 Hz, all outputs{', recording' if record else ''}, one external subscriber, "
-          f"{seconds:g} s: achieved "
+    loop = (f", top drive in torque mode, {controller.sent / seconds:.0f} torque commands/s "
+            "back" if controller is not None else "")
+    print(f"1000 Hz, all outputs{', recording' if record else ''}, one external subscriber"
+          f"{loop}, {seconds:g} s: achieved "
           f"{rate:.1f} Hz ({100 * rate / 1000:.2f} %), received period p50 "
           f"{np.percentile(periods, 50):.3f} ms, p99 {np.percentile(periods, 99):.3f} ms; "
           f"tick period p99 in the node per 1 s window: median {np.median(p99s):.3f} ms, "
@@ -135,11 +178,21 @@ def max_speed(node, rate_hz: float, seconds: float = 10.0) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--seconds", type=float, default=30.0)
+    parser.add_argument("--top-drive-mode", choices=("kinematic", "torque"),
+                        default="kinematic")
     args = parser.parse_args()
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     rclpy.init()
     node = rclpy.create_node("drill_sim_bench")
+    if args.top_drive_mode == "torque":
+        plain = rate_and_cpu(node, args.seconds, mode="torque")
+        with tempfile.TemporaryDirectory() as tmp:
+            recording = rate_and_cpu(node, args.seconds, record=f"{tmp}/bag", mode="torque")
+        print(f"CPU added by in-node recording: {100 * (recording - plain):.1f} % of one core")
+        node.destroy_node()
+        rclpy.shutdown()
+        return
     plain = rate_and_cpu(node, args.seconds)
     with tempfile.TemporaryDirectory() as tmp:
         recording = rate_and_cpu(node, args.seconds, record=f"{tmp}/bag")

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import os
 import struct
+import tempfile
 import threading
 import time
 import zlib
@@ -71,9 +72,10 @@ class McapFileWriter:
         self._compress = zstandard.ZstdCompressor(level=zstd_level).compress
         self._schemas: list[Schema] = []
         self._channels: list[Channel] = []
-        # the summary's chunk indexes, encoded as each chunk is written: ~150 bytes a chunk
-        # where the record objects took ~2 kB (10 chunks a second at the node's max speed)
-        self._chunk_index_records = bytearray()
+        # the summary's chunk indexes, encoded as each chunk is written (~150 bytes a chunk, 10
+        # chunks a second at the node's max speed) and kept in an anonymous temporary file until
+        # the summary is written: a file recorded for hours keeps its writer's memory flat
+        self._chunk_index_records = tempfile.TemporaryFile(prefix="mcap-chunk-indexes-")
         self._chunk_count = 0
         self._metadata_indexes: list[MetadataIndex] = []
         self._counts: dict[int, int] = {}
@@ -188,11 +190,11 @@ class McapFileWriter:
             offsets[channel_id] = self._written
             self._write_now(_INDEX_HEAD.pack(Opcode.MESSAGE_INDEX, 2 + 4 + 16 * n, channel_id,
                                              16 * n) + pairs.tobytes())
-        self._chunk_index_records += _encode(ChunkIndex(
+        self._chunk_index_records.write(_encode(ChunkIndex(
             message_start_time=start, message_end_time=end, chunk_start_offset=chunk_start,
             chunk_length=chunk_length, message_index_offsets=offsets,
             message_index_length=self._written - index_start, compression="zstd",
-            compressed_size=len(data), uncompressed_size=len(raw)))
+            compressed_size=len(data), uncompressed_size=len(raw))))
         self._chunk_count += 1
         self._done += len(raw)
         self._written_event.set()
@@ -225,9 +227,13 @@ class McapFileWriter:
         self._finishing = True                           # the rest is written here
         self._write_records(DataEnd(data_section_crc=0))
         summary_start = self._written
+        spill = self._chunk_index_records
+        spill.seek(0)
+        chunk_indexes = bytearray(spill.read())
+        spill.close()
         groups = [(Opcode.SCHEMA, self._schemas), (Opcode.CHANNEL, self._channels),
                   (Opcode.STATISTICS, [self._statistics()]),
-                  (Opcode.CHUNK_INDEX, self._chunk_index_records),
+                  (Opcode.CHUNK_INDEX, chunk_indexes),
                   (Opcode.METADATA_INDEX, self._metadata_indexes)]
         summary = bytearray()
         offsets = []

@@ -21,13 +21,14 @@ from functools import partial
 from pathlib import Path
 
 from ..core import NoSteadyDrilling, ParameterError, session
-from ..core.rig import Rig, RigSample
+from ..core.rig import Rig
 from ..wire import cdr, rig_topics
 from .bag import Bag, opened
 from .errors import BagError
 from .series import JOINT_ARRAY_START, JOINT_FIELDS, JOINT_VALUES_F64, joint_state_layout
 
 _STAMP = struct.Struct("<iI")
+MOTOR_TORQUE = "motor_torque_nm"            # compared from ~/top_drive/motor_wrench when recorded
 _JOINT_VALUES = struct.Struct(f"<{JOINT_VALUES_F64}d")
 
 
@@ -44,7 +45,7 @@ class ResimResult:
     refused: int = 0
     events: list[str] = field(default_factory=list)
     max_difference: dict[str, float] = field(
-        default_factory=lambda: dict.fromkeys(JOINT_FIELDS, 0.0))
+        default_factory=lambda: dict.fromkeys((*JOINT_FIELDS, MOTOR_TORQUE), 0.0))
     worst: tuple[str, float, float] = ("", 0.0, 0.0)
     problems: list[str] = field(default_factory=list)
 
@@ -111,7 +112,8 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
             from None
     run = _Rerun(rig, p, epoch_ns, result)
     total = max(found.topics[topics["joints"]].count, 1)
-    handlers = {topics["joints"]: run.sample, topics["events"]: run.event}
+    handlers = {topics["joints"]: run.sample, topics["events"]: run.event,
+                rig_topics.topic("~/top_drive/motor_wrench").under(node): run.motor}
     handlers.update({t.under(node): partial(run.command, t.command) for t in rig_topics.COMMANDS})
     walked: list[str] = []
     for m in bag.messages(set(handlers), walked):
@@ -129,32 +131,46 @@ class _Rerun:
         self.rig, self.p, self.epoch_ns, self.result = rig, p, epoch_ns, result
         self.offset_s = 0.0                      # simulated time before the last reset
         self.values_at: int | None = None        # byte offset of the joint arrays
+        self.types = {t.command: t.type_name for t in rig_topics.COMMANDS}
 
-    def sample(self, data: bytes) -> None:
-        if self.values_at is None:
-            self.values_at = joint_state_layout(data)[1]
+    def _advance(self, data: bytes) -> float:
+        """To the step of a recorded output's stamp; its simulated time [s]."""
         sec, nsec = _STAMP.unpack_from(data, 4)
         sim_time_s = (sec * 1_000_000_000 + nsec - self.epoch_ns) * 1e-9
         step = round((sim_time_s - self.offset_s) / self.rig.dt_s)
         ahead = step - self.rig.steps
         if ahead > 0:
             self.rig.advance_steps(ahead)
+        return sim_time_s
+
+    def sample(self, data: bytes) -> None:
+        if self.values_at is None:
+            self.values_at = joint_state_layout(data)[1]
+        sim_time_s = self._advance(data)
         recorded = _JOINT_VALUES.unpack_from(data, self.values_at)
-        self._compare(self.rig.sample(), recorded, sim_time_s)
+        s = self.rig.sample()
+        for name, (kind, j) in JOINT_FIELDS.items():
+            self._compare(name, getattr(s, name), recorded[JOINT_ARRAY_START[kind] + j],
+                          sim_time_s)
         self.result.samples += 1
 
-    def _compare(self, s: RigSample, recorded: tuple[float, ...], t: float) -> None:
+    def motor(self, data: bytes) -> None:
+        """A recorded motor torque (published after the tick's joint_states, at its step)."""
+        sim_time_s = self._advance(data)
+        torque_nm = cdr.decode_stamped_vectors(data)[3][5]
+        self._compare(MOTOR_TORQUE, self.rig.motor_torque_nm, torque_nm, sim_time_s)
+
+    def _compare(self, name: str, rerun: float, recorded: float, t: float) -> None:
         r = self.result
-        for name, (kind, j) in JOINT_FIELDS.items():
-            diff = abs(getattr(s, name) - recorded[JOINT_ARRAY_START[kind] + j])
-            if not diff <= r.max_difference[name]:        # also catches NaN
-                r.max_difference[name] = diff if not math.isnan(diff) else math.inf
-                if r.max_difference[name] > r.worst[1]:
-                    r.worst = (name, r.max_difference[name], t)
+        diff = abs(rerun - recorded)
+        if not diff <= r.max_difference[name]:            # also catches NaN
+            r.max_difference[name] = diff if not math.isnan(diff) else math.inf
+            if r.max_difference[name] > r.worst[1]:
+                r.worst = (name, r.max_difference[name], t)
 
     def command(self, name: str, data: bytes) -> None:
         """A recorded command, accepted or refused by the node's own rule."""
-        frame, _, _, six = cdr.decode_stamped_vectors(data)
+        frame, _, _, six = cdr.decode_command(self.types[name], data)
         if session.apply_command(self.rig, self.p, name, frame, six) is None:
             self.result.commands += 1
         else:

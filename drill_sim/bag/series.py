@@ -130,9 +130,13 @@ def columns(values: np.ndarray) -> dict[str, np.ndarray]:
 
 def joint_topic(bag: Bag, topic: str | None = None) -> str:
     """The rig's joint_states topic: ``topic`` if the bag has it, else the one JointState
-    topic (BagError if there is none or several)."""
+    topic, the rig's ``.../joint_states`` first (the node also records the JointState
+    commands it receives); BagError if there is none or several."""
     joint_topics = sorted(t for t, kind in bag.topic_types().items()
                           if kind == JOINT_STATE and (topic is None or t == topic))
+    outputs = [t for t in joint_topics if t.endswith(JOINT_STATES.name[1:])]
+    if topic is None and len(outputs) == 1:
+        joint_topics = outputs
     if not joint_topics:
         raise BagError(f"bag {bag.path}: no {JOINT_STATE} topic"
                        f"{'' if topic is None else ' ' + topic} to read the rig from")

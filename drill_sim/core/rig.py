@@ -214,6 +214,14 @@ class Rig:
         return self._torque_nm
 
     @property
+    def motor_torque_nm(self) -> float:
+        """The motor torque applied now [N m], as ``sample`` gives it (kinematic mode: the
+        string torque), without taking ``sample``'s force means."""
+        x = self.sim.live_state
+        kinematic = self.sim.drive.mode == "kinematic"
+        return float(x[kn.X_TS if kinematic else kn.X_TM]) * self.scales.stiffness_nm_per_rad
+
+    @property
     def commanded_speed_rad_s(self) -> float:
         return self._speed_rad_s
 

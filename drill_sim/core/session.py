@@ -9,12 +9,18 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING
 
 from .parameters import ParameterError, RigParameters
 from .rig import Rig
+from .top_drive import TopDriveParameters
 
 COMMAND_FRAMES = ("", "top_drive")        # frame_id accepted on commands
 RIG_FIELDS = tuple(f.name for f in fields(RigParameters))
+TOP_DRIVE_FIELDS = tuple(f.name for f in fields(TopDriveParameters))
+
+if TYPE_CHECKING:
+    from ..wire.cdr import JointCommand
 
 
 def rig_parameters(values: dict[str, object]) -> RigParameters:
@@ -54,10 +60,22 @@ def figures_line(params: RigParameters) -> str:
             f"lambda {f['lambda']:.3g}, beta {f['beta']:.3g}")
 
 
+def top_drive_parameters(values: dict[str, object]) -> TopDriveParameters:
+    """TopDriveParameters from parameter values (motor_torque_rate_nm_s 0: no rate limit);
+    a session recorded before the top drive had parameters keeps the seed's kinematic drive."""
+    if "top_drive_mode" not in values:
+        return TopDriveParameters()
+    d = {name: values[name] for name in TOP_DRIVE_FIELDS}
+    if d["motor_torque_rate_nm_s"] == 0:
+        d["motor_torque_rate_nm_s"] = math.inf
+    return TopDriveParameters(**d)
+
+
 def make_rig(p: dict[str, object]) -> Rig:
     """The rig of a session's parameters, not yet started."""
     return Rig(rig_parameters(p), dt_s=p["dt_s"], stick_window_s=p["stick_slip_window_s"],
-               hoist_speed_limit_m_s=p["hoist_speed_limit_m_s"])
+               hoist_speed_limit_m_s=p["hoist_speed_limit_m_s"],
+               top_drive=top_drive_parameters(p))
 
 
 def start(rig: Rig, p: dict[str, object]) -> None:
@@ -85,51 +103,130 @@ class CommandRule:
     what: str            # for refusals
     field: str           # message field path
     index: int
-    slot: int
-    limit: str           # parameter: the largest value accepted
+    slot: int            # 2: the motor torque (``Rig.command_motor_torque``)
+    limit: str | float   # parameter (or a fixed value): the largest value accepted
     unit: str
+    signed: bool = False         # accepted in [-limit, limit], not [0, limit]
+    mode: str = ""               # the top_drive_mode it needs ("" any)
 
 
+MOTOR_TORQUE_COMMAND_LIMIT_NM = 1e6       # |motor torque command|: beyond any top drive
+JOINT_COMMANDS = "joint_commands"         # the rule of sensor_msgs/JointState commands
 COMMANDS = {
     "top_drive": CommandRule("top-drive speed", "twist.angular.z", 5, 0,
                              "max_top_drive_speed_rad_s", "rad/s"),
     "hook_load": CommandRule("hook load", "wrench.force.z", 2, 1, "max_hook_load_n", "N"),
+    "top_drive_torque": CommandRule("motor torque", "wrench.torque.z", 5, 2,
+                                    MOTOR_TORQUE_COMMAND_LIMIT_NM, "N m", signed=True,
+                                    mode="torque"),
 }
+# a JointState command: (joint, array) -> the rule its value goes through
+JOINT_RULES = {("top_drive", "velocity"): "top_drive", ("top_drive", "effort"): "top_drive_torque",
+               ("hook", "effort"): "hook_load"}
 
 
-def command_refusal(frame_id: str, value: float, high: float, what: str, unit: str
-                    ) -> tuple[str, object, str] | None:
+Refusal = tuple[str, object, str]          # (what, value, expected)
+
+
+def command_refusal(frame_id: str, value: float, high: float, what: str, unit: str,
+                    low: float = 0.0) -> Refusal | None:
     """Why a command is refused, as (what, value, expected), or None if it is used: the frame
-    must be one of COMMAND_FRAMES and the value finite in [0, high]."""
+    must be one of COMMAND_FRAMES and the value finite in [low, high]."""
     if frame_id not in COMMAND_FRAMES:
         return f"{what} frame_id", frame_id, "'top_drive' or empty"
-    if not (math.isfinite(value) and 0.0 <= value <= high):
-        return f"{what} [{unit}]", value, f"a finite value in [0, {high:g}] {unit}"
+    if not (math.isfinite(value) and low <= value <= high):
+        return f"{what} [{unit}]", value, f"a finite value in [{low:g}, {high:g}] {unit}"
     return None
 
 
+def _rule_refusal(p: dict[str, object], rule: CommandRule, frame_id: str, value: float,
+                  what: str) -> Refusal | None:
+    if rule.mode and p.get("top_drive_mode", "kinematic") != rule.mode:
+        return (f"{what} (top_drive_mode is {p.get('top_drive_mode', 'kinematic')})", value,
+                f"top_drive_mode = {rule.mode}: set it first (ros2 param set ... "
+                f"top_drive_mode {rule.mode})")
+    high = p[rule.limit] if isinstance(rule.limit, str) else rule.limit
+    return command_refusal(frame_id, value, high, what, rule.unit,
+                           -high if rule.signed else 0.0)
+
+
+def _hold(rig: Rig, rule: CommandRule, value: float) -> None:
+    if rule.slot == 2:
+        rig.command_motor_torque(value)
+        return
+    held = [rig.commanded_speed_rad_s, rig.commanded_hook_load_n]
+    held[rule.slot] = value
+    rig.command(*held)
+
+
 def apply_command(rig: Rig, p: dict[str, object], name: str, frame_id: str,
-                  six: Sequence[float]) -> tuple[str, object, str] | None:
-    """Command ``name`` (a key of COMMANDS) arriving as ``six`` with ``frame_id``: held by the
-    rig from now on if accepted (None), else the refusal as ``command_refusal`` gives it and the
-    rig untouched. The node and the re-simulation of its bags both decide here."""
+                  six: Sequence[float] | JointCommand) -> Refusal | None:
+    """Command ``name`` (a key of COMMANDS, or JOINT_COMMANDS with a JointCommand) arriving
+    as ``six`` with ``frame_id``: held by the rig from now on if accepted (None), else the
+    refusal as ``command_refusal`` gives it and the rig untouched. The node and the
+    re-simulation of its bags both decide here."""
+    if name == JOINT_COMMANDS:
+        return _apply_joints(rig, p, frame_id, six)
     rule = COMMANDS[name]
     value = six[rule.index]
-    refusal = command_refusal(frame_id, value, p[rule.limit], f"{rule.what} {rule.field}",
-                              rule.unit)
+    refusal = _rule_refusal(p, rule, frame_id, value, f"{rule.what} {rule.field}")
     if refusal is None:
-        held = [rig.commanded_speed_rad_s, rig.commanded_hook_load_n]
-        held[rule.slot] = value
-        rig.command(*held)
+        _hold(rig, rule, value)
     return refusal
+
+
+def _apply_joints(rig: Rig, p: dict[str, object], frame_id: str, j: JointCommand
+                  ) -> Refusal | None:
+    """A JointState command, taken whole or not at all: each (joint, velocity or effort) value
+    goes through the rule of the topic that carries it (JOINT_RULES); unknown joints, a
+    position, arrays whose length is neither 0 nor the number of names, or any value refused
+    leave the rig untouched."""
+    names = "'top_drive', 'hook'"
+    if len(set(j.name)) != len(j.name) or not j.name:
+        return "joint command name", list(j.name), f"distinct joint names among {names}"
+    for n in j.name:
+        if n not in ("top_drive", "hook"):
+            return "joint command name", n, f"one of {names}"
+    if j.position:
+        return "joint command position", list(j.position), \
+            "empty: the rig takes velocity (top_drive) and effort (top_drive, hook) only"
+    values = []
+    for array in ("velocity", "effort"):
+        given = getattr(j, array)
+        if not given:
+            continue
+        if len(given) != len(j.name):
+            return (f"joint command {array} (for {len(j.name)} names)", list(given),
+                    f"{len(j.name)} values, or none")
+        for n, value in zip(j.name, given, strict=True):
+            if (n, array) not in JOINT_RULES:
+                return f"joint command {n} {array}", value, "none: hook takes effort only"
+            rule = COMMANDS[JOINT_RULES[(n, array)]]
+            refusal = _rule_refusal(p, rule, frame_id, value,
+                                    f"joint command {n} {array} ({rule.what})")
+            if refusal is not None:
+                return refusal
+            values.append((rule, value))
+    if not values:
+        return "joint command", list(j.name), "a velocity or an effort for each joint"
+    for rule, value in values:
+        _hold(rig, rule, value)
+    return None
 
 
 def apply_changes(rig: Rig, old: dict[str, object], new: dict[str, object]) -> set[str]:
     """Bring the rig to the parameter values ``new`` (from ``old``); the names that changed.
     Raises ParameterError, leaving the rig as it was, if the new values are refused."""
     changed = {k for k in new if new[k] != old.get(k)}
+    old_drive = rig.top_drive
+    if changed & set(TOP_DRIVE_FIELDS):
+        rig.set_top_drive(top_drive_parameters(new))        # a change of mode is bumpless
     if changed & set(RIG_FIELDS):
-        rig.replace_parameters(rig_parameters(new))
+        try:
+            rig.replace_parameters(rig_parameters(new))
+        except ParameterError:
+            rig.set_top_drive(old_drive)
+            raise
     if "stick_slip_window_s" in changed:
         rig.set_stick_window(new["stick_slip_window_s"])
     if "hoist_speed_limit_m_s" in changed:

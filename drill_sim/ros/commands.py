@@ -24,7 +24,7 @@ from rclpy.node import Node
 from rclpy.type_support import check_is_valid_msg_type
 
 from ..wire import WireError, rig_topics
-from ..wire.cdr import decode_stamped_vectors
+from ..wire.cdr import JointCommand, decode_command
 from ..wire.rig_topics import RigTopic
 from .topics import message_class, rclpy_qos
 
@@ -38,7 +38,8 @@ class Command:
     frame_id: str
     sec: int
     nanosec: int
-    six: tuple[float, ...]           # the six float64 (``wire.cdr.VECTOR_FIELDS`` order)
+    six: tuple[float, ...] | JointCommand   # the six float64 (``wire.cdr.VECTOR_FIELDS``
+                                            # order); a JointState's names and arrays
 
 
 class CommandInbox:
@@ -74,7 +75,7 @@ class CommandInbox:
                 self.received += 1
                 self._count_gap(t.name, handle, info.get("publication_sequence_number"))
                 try:
-                    frame_id, sec, nanosec, six = decode_stamped_vectors(data)
+                    frame_id, sec, nanosec, six = decode_command(t.type_name, data)
                 except WireError:
                     self.undecodable += 1
                     continue

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 from ..core import Preset
 from ..core.simulator import DEFAULT_DT
+from ..core.top_drive import MODES as TOP_DRIVE_MODES
 
 MIB = 1 << 20
 BOOL, INT, FLOAT, STR = bool, int, float, str
@@ -173,7 +174,38 @@ def specs(preset: Preset) -> list[Spec]:
              "bytes", 0, 2**62, "1 MiB at least: smaller than a chunk, files would split at "
              "every flush", off_or_at_least=MIB),
     ]
-    return out
+    return out + top_drive_specs(preset)
+
+
+def top_drive_specs(preset: Preset) -> list[Spec]:
+    """The top drive's parameters (``core.top_drive.TopDriveParameters``' fields, defaults
+    from the preset); all change at run time, a change of mode bumplessly."""
+    d = preset.top_drive
+    rate = 0.0 if d.motor_torque_rate_nm_s == math.inf else d.motor_torque_rate_nm_s
+    torque = "top drives deliver ~30-110 kN m; 1 MN m is beyond any"
+    return [
+        Spec("top_drive_mode", d.top_drive_mode, "kinematic (an ideal speed source), speed "
+             "(the drive's own PI on the speed set-point) or torque (the motor torque is the "
+             "command ~/cmd/top_drive_torque)", choices=TOP_DRIVE_MODES),
+        Spec("top_drive_inertia_kg_m2", d.top_drive_inertia_kg_m2, "top drive's polar inertia "
+             "J_TD (motor, gearbox, quill)", "kg m^2", 1.0, 1e5,
+             "published field models use ~2900 kg m^2; 1e5 is close to an ideal speed source"),
+        Spec("motor_torque_max_nm", d.motor_torque_max_nm, "largest motor torque T_max", "N m",
+             0.0, 1e6, torque),
+        Spec("motor_torque_min_nm", d.motor_torque_min_nm, "smallest motor torque T_min (0: a "
+             "drive that cannot brake)", "N m", -1e6, 0.0, torque),
+        Spec("motor_torque_rate_nm_s", rate, "motor torque rate limit; 0: none", "N m/s",
+             0.0, 1e9, "drives ramp their torque in ~10 ms to seconds", off_or_at_least=1.0),
+        Spec("drive_lag_s", d.drive_lag_s, "time constant of the motor torque's first-order "
+             "lag (the drive's current loop); 0: none", "s", 0.0, 10.0,
+             "current loops settle in ~1-50 ms"),
+        Spec("drive_kp_nm_s_rad", float(d.drive_kp_nm_s_rad or 0.0), "speed mode: the drive "
+             "PI's proportional gain K_p (default 50 Z, Z the pipe's torsional impedance)",
+             "N m s/rad", 0.0, 1e8, "a stiff PI is ~50 Z (1.5e4 on base)"),
+        Spec("drive_ki_nm_rad", float(d.drive_ki_nm_rad), "speed mode: the drive PI's "
+             "integral gain K_i (default 5 J_TD [1/s^2])", "N m/rad", 0.0, 1e9,
+             "5 J_TD is 1.45e4 for 2900 kg m^2"),
+    ]
 
 
 PRESET_READ_ONLY = "the preset sets every model parameter's default; " + START_ONLY

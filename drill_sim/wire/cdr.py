@@ -20,6 +20,7 @@ import struct
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from operator import attrgetter
+from typing import NamedTuple
 
 from . import WireError
 
@@ -302,3 +303,77 @@ def decode_stamped_vectors(data: bytes) -> tuple[str, int, int, tuple[float, ...
     except struct.error:
         raise WireError(f"{len(data)} bytes cannot hold a stamped vector message") from None
     return frame, sec, nanosec, six
+
+
+class JointCommand(NamedTuple):
+    """A sensor_msgs/JointState taken as a command: joint names and the three arrays (each
+    empty or, when well formed, as long as the names)."""
+
+    name: tuple[str, ...]
+    position: tuple[float, ...]
+    velocity: tuple[float, ...]
+    effort: tuple[float, ...]
+
+
+class _Reader:
+    """Reads CDR fields in order, aligned from after the encapsulation header."""
+
+    def __init__(self, data: bytes, at: int) -> None:
+        self.data, self.at = data, at
+
+    def _align(self, size: int) -> None:
+        self.at += -(self.at - 4) % size
+
+    def u32(self) -> int:
+        self._align(4)
+        (n,) = _U32.unpack_from(self.data, self.at)
+        self.at += 4
+        return n
+
+    def string(self) -> str:
+        n = self.u32()
+        if n < 1 or self.at + n > len(self.data):
+            raise WireError(f"a string of length {n} (no terminating NUL, or past the end)")
+        text = bytes(self.data[self.at:self.at + n - 1]).decode("utf-8", "replace")
+        self.at += n
+        return text
+
+    def doubles(self) -> tuple[float, ...]:
+        n = self.u32()
+        if n == 0:
+            return ()
+        self._align(8)
+        values = struct.unpack_from(f"<{n}d", self.data, self.at)
+        self.at += 8 * n
+        return values
+
+
+MAX_JOINT_COMMAND_NAMES = 64              # a command names a few joints; more is not one
+
+
+def decode_joint_state(data: bytes) -> tuple[str, int, int, JointCommand]:
+    """frame_id, stamp (sec, nanosec) and the names and arrays of a sensor_msgs/JointState in
+    little-endian CDR (any lengths; ``JointCommand`` says which are well formed)."""
+    try:
+        if bytes(data[:2]) != ENCAPSULATION[:2]:
+            raise WireError(f"not little-endian CDR (header {bytes(data[:4]).hex()})")
+        sec, nanosec = _STAMP.unpack_from(data, 4)
+        r = _Reader(data, 12)
+        frame = r.string()
+        count = r.u32()
+        if count > MAX_JOINT_COMMAND_NAMES:
+            raise WireError(f"{count} joint names (at most {MAX_JOINT_COMMAND_NAMES})")
+        names = tuple(r.string() for _ in range(count))
+        position, velocity, effort = r.doubles(), r.doubles(), r.doubles()
+    except struct.error:
+        raise WireError(f"{len(data)} bytes cannot hold a JointState") from None
+    return frame, sec, nanosec, JointCommand(names, position, velocity, effort)
+
+
+def decode_command(type_name: str, data: bytes
+                   ) -> tuple[str, int, int, tuple[float, ...] | JointCommand]:
+    """A command message's frame_id, stamp and values: the six float64 of a TwistStamped or
+    WrenchStamped (``decode_stamped_vectors``), or a JointState's ``JointCommand``."""
+    if type_name == JOINT_STATE:
+        return decode_joint_state(data)
+    return decode_stamped_vectors(data)

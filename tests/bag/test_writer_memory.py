@@ -1,5 +1,6 @@
-"""What a bag writer keeps in memory per chunk written (for the file's summary) stays small:
-the node closes a chunk at least every second and ~10 a second at max speed, for hours."""
+"""What a bag writer keeps in memory per chunk written stays small (the summary's chunk indexes
+wait on disk): the node closes a chunk at least every second and ~10 a second at max speed,
+for hours."""
 
 from __future__ import annotations
 
@@ -46,7 +47,8 @@ def test_memory_kept_per_chunk_is_a_few_hundred_bytes(tmp_path):
     per_chunk = (tracemalloc.get_traced_memory()[0] - before) / 1000
     tracemalloc.stop()
     w.close()
-    assert per_chunk < 400, f"{per_chunk:.0f} bytes kept per chunk"  # 1.4 kB as records
+    # ~200 bytes with the indexes in memory, 1.4 kB as record objects
+    assert per_chunk < 40, f"{per_chunk:.0f} bytes kept per chunk"
     assert reader.info(tmp_path / "many_chunks").message_count == 1200 * 20 * len(TOPICS)
 
 

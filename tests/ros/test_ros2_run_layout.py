@@ -35,7 +35,8 @@ def test_colcon_build_and_ros2_run_lookup(tmp_path):
     for name in ("drill_sim_drive", "drill_sim_record", "drill_sim_replay"):
         assert (Path(found) / "lib" / "drill_sim" / name).is_file(), name
     assert (prefix / "share" / "drill_sim" / "package.xml").is_file()
-    assert (prefix / "share" / "drill_sim" / "config" / "drill_sim.yaml").is_file()
+    for config in ("drill_sim.yaml", "foxglove_layout.json", "plotjuggler_layout.xml"):
+        assert (prefix / "share" / "drill_sim" / "config" / config).is_file(), config
     # run it the way ros2 run would, from the install space
     isolate()
     site = next((prefix / "lib").glob("python3*/site-packages"))

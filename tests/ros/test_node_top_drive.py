@@ -1,0 +1,173 @@
+"""The top drive at the node: its parameters, the motor torque command, the outputs that show
+the drive, JointState commands and a torque-mode session re-run exactly from its bag.
+
+The motor torque is checked against the law of the drive (model contract, section 9) written
+out here: a command beyond the limit is clipped to T_max, and the lag makes the applied torque
+T_max + (T0 - T_max) exp(-(t - t_c)/tau) from the tick t_c that took the command."""
+
+from __future__ import annotations
+
+import math
+from itertools import pairwise
+
+import pytest
+from geometry_msgs.msg import TwistStamped, WrenchStamped
+from rosutil import NodeProcess, spin_for, wait_for
+from sensor_msgs.msg import JointState
+
+from drill_sim.bag.resim import resimulate
+
+LAG_S, T_MAX_NM, T_MIN_NM = 0.05, 20e3, -15e3
+
+
+class _Rig:
+    """The test client's view of one rig: its top-drive outputs and command publishers."""
+
+    def __init__(self, ros, ns: str) -> None:
+        self.ros, self.base = ros, f"{ns}/drill_sim"
+        self.motor: list[tuple[float, float]] = []       # (stamp [s], motor torque [N m])
+        self.speed: list[float] = []                      # top-drive speed [rad/s]
+        self.surface: list[tuple[float, float]] = []      # (surface torque [N m], hook load [N])
+        ros.create_subscription(WrenchStamped, f"{self.base}/top_drive/motor_wrench",
+                                lambda m: self.motor.append(
+                                    (m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec,
+                                     m.wrench.torque.z)), 1000)
+        ros.create_subscription(TwistStamped, f"{self.base}/top_drive/twist",
+                                lambda m: self.speed.append(m.twist.angular.z), 1000)
+        ros.create_subscription(WrenchStamped, f"{self.base}/top_drive/wrench",
+                                lambda m: self.surface.append((m.wrench.torque.z,
+                                                               m.wrench.force.z)), 1000)
+        self.torque = ros.create_publisher(WrenchStamped, f"{self.base}/cmd/top_drive_torque", 10)
+        self.joints = ros.create_publisher(JointState, f"{self.base}/cmd/joint_commands", 10)
+        wait_for(lambda: len(self.motor) > 20 and self.torque.get_subscription_count() > 0
+                 and self.joints.get_subscription_count() > 0, ros, 30.0,
+                 f"the rig in {ns} running and subscribed")
+
+    def send_torque(self, value: float) -> None:
+        msg = WrenchStamped()
+        msg.header.frame_id = "top_drive"
+        msg.wrench.torque.z = value
+        self.torque.publish(msg)
+
+    def send_joints(self, names: list[str], velocity=(), effort=()) -> None:
+        self.joints.publish(JointState(name=names, velocity=list(velocity),
+                                       effort=list(effort)))
+
+    def until(self, condition, what: str, resend=None) -> None:
+        """Wait for ``condition`` (re-sending with ``resend`` meanwhile: the first messages
+        may go before discovery completes)."""
+        def check() -> bool:
+            if resend is not None:
+                resend()
+            return condition()
+        wait_for(check, self.ros, 20.0, what)
+
+
+def test_torque_mode_applies_the_command_through_limit_and_lag_and_resim_is_exact(
+        ros, tmp_path):
+    """A saturating command shows T_max after the lag's exponential; a negative one T_min;
+    NaN is refused; a JointState effort commands the motor torque and the hook load; the
+    recorded session re-runs bit for bit."""
+    bag = tmp_path / "torque"
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/tdq", "-p",
+                     "publish_clock:=true", "-p", "top_drive_mode:=torque", "-p",
+                     f"drive_lag_s:={LAG_S}", "-p", f"motor_torque_max_nm:={T_MAX_NM}", "-p",
+                     f"motor_torque_min_nm:={T_MIN_NM}", "-p", f"record:={bag}") as node:
+        rig = _Rig(ros, "/tdq")
+        t0_nm = rig.motor[-1][1]
+        assert 0.0 < t0_nm < T_MAX_NM                # the steady torque, held before commands
+        assert all(t == t0_nm for _, t in rig.motor)
+        rig.until(lambda: rig.motor[-1][1] != t0_nm, "the motor torque to move",
+                  lambda: rig.send_torque(1e5))
+        spin_for(ros, 0.3)
+        before = [s for s in rig.motor if s[1] == t0_nm]
+        t_c = before[-1][0]                           # the tick that took the command
+        after = [s for s in rig.motor if s[0] > t_c]
+        assert len(after) > 100
+        for t, torque in after:
+            expected = T_MAX_NM + (t0_nm - T_MAX_NM) * math.exp(-(t - t_c) / LAG_S)
+            # the stamps are whole nanoseconds: 1 ns of a 3e5 N m/s ramp is 3e-4 N m
+            assert torque == pytest.approx(expected, rel=1e-9, abs=1e-3), t - t_c
+        assert after[-1][1] > T_MAX_NM - 0.01 * (T_MAX_NM - t0_nm)
+        assert max(s for _, s in rig.motor) <= T_MAX_NM
+
+        rig.send_torque(math.nan)                     # refused: the torque stays at T_max
+        spin_for(ros, 0.3)
+        assert rig.motor[-1][1] == pytest.approx(T_MAX_NM, rel=1e-3)
+
+        hook_n = rig.surface[-1][1] + 20e3            # JointState: brake and lift by 20 kN
+        rig.until(lambda: rig.motor[-1][1] < T_MIN_NM * 0.99 and rig.surface[-1][1] == hook_n,
+                  "the JointState's effort to reach the motor torque and the hook load",
+                  lambda: rig.send_joints(["top_drive", "hook"], effort=[-1e5, hook_n]))
+        assert min(t for _, t in rig.motor) >= T_MIN_NM
+        code, out = node.stop()
+    assert code == 0, out
+    assert "refused motor torque wrench.torque.z [N m] = nan" in out, out
+    result = resimulate(bag)
+    assert result.exact, (result.explanation(), result.max_difference)
+    assert result.commands > 3 and result.refused >= 1
+
+
+def test_kinematic_mode_refuses_torque_and_follows_joint_velocity_then_switches(ros):
+    """In kinematic mode a torque command is refused naming the mode, a JointState velocity is
+    the speed set-point, malformed JointStates are refused whole; a run-time switch to torque
+    mode is bumpless and then the torque command is taken."""
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+    from rosutil import call_service
+
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/tdk") as node:
+        rig = _Rig(ros, "/tdk")
+        speed0 = rig.speed[-1]
+        assert speed0 == pytest.approx(2 * math.pi)              # 60 rpm: the set-point
+        assert rig.motor[-1][1] == rig.surface[-1][0]            # kinematic: the string torque
+        for _ in range(3):
+            rig.send_torque(1e4)
+            rig.send_joints(["top_drive", "crown_block"], velocity=[5.0, 1.0])
+            rig.send_joints(["top_drive", "hook"], velocity=[5.0])   # lengths differ
+            rig.send_joints(["top_drive"], effort=[1e4])         # effort needs torque mode
+            spin_for(ros, 0.05)
+        spin_for(ros, 0.2)
+        assert set(rig.speed[-100:]) == {speed0}                 # nothing of those was used
+        rig.until(lambda: rig.speed[-1] == 3.0, "the JointState velocity as the set-point",
+                  lambda: rig.send_joints(["top_drive"], velocity=[3.0]))
+
+        def set_mode(value: str):
+            p = Parameter(name="top_drive_mode", value=ParameterValue(
+                type=ParameterType.PARAMETER_STRING, string_value=value))
+            return call_service(ros, SetParameters, f"{rig.base}/set_parameters",
+                                SetParameters.Request(parameters=[p])).results[0]
+
+        assert not set_mode("turbo").successful
+        n = len(rig.motor)
+        assert set_mode("torque").successful
+        spin_for(ros, 0.3)
+        # bumpless: the motor holds the string's torque; the speed stays near 3 rad/s
+        window = [t for _, t in rig.motor[n - 50:]]
+        jumps = [abs(b - a) for a, b in pairwise(window)]
+        assert max(jumps) < 0.02 * abs(window[0]), max(jumps)
+        assert rig.speed[-1] == pytest.approx(3.0, rel=0.05)
+        rig.until(lambda: rig.motor[-1][1] == pytest.approx(0.0, abs=1.0),
+                  "the torque command taken after the switch", lambda: rig.send_torque(0.0))
+        code, out = node.stop()
+    assert code == 0, out
+    assert "top_drive_mode is kinematic" in out, out    # (one refusal a second is logged;
+    # the JointState refusals' texts: tests/core/test_session_top_drive.py)
+
+
+@pytest.mark.parametrize("params, fragment", [
+    (["top_drive_mode:=turbo"], "top_drive_mode = 'turbo': expected one of kinematic, speed, "
+                                "torque"),
+    (["top_drive_inertia_kg_m2:=-5.0"], "top_drive_inertia_kg_m2 = -5.0: expected a finite "
+                                        "number from 1 to 100000 kg m^2"),
+    (["motor_torque_max_nm:=0.0", "motor_torque_min_nm:=0.0"],
+     "motor_torque_min_nm = 0.0 is out of range: expected < motor_torque_max_nm = 0.0"),
+])
+def test_a_bad_top_drive_parameter_stops_the_node_with_one_line(ros, params, fragment):
+    args = [a for p in params for a in ("-p", p)]
+    node = NodeProcess("drill_sim_node", "--ros-args", *args)
+    node.proc.wait(timeout=30.0)
+    code, out = node.stop()
+    assert code == 2, out
+    assert fragment in out, out
+    assert "Traceback" not in out, out
