@@ -10,8 +10,9 @@ import numpy as np
 def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
                      top_drive_speed: np.ndarray, wob: np.ndarray, tob: np.ndarray,
                      surface_torque: np.ndarray, stuck: np.ndarray, *, units: dict[str, str],
-                     title: str) -> None:
-    """Write a three-panel PNG; ``units`` labels the axes (time, speed, force, torque)."""
+                     title: str, marks: dict[float, str] | None = None) -> None:
+    """Write a three-panel PNG; ``units`` labels the axes (time, speed, force, torque);
+    ``marks``: time -> label, drawn as dashed vertical lines (a controller switched on)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -35,11 +36,17 @@ def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
     axes[2].set_xlabel(f"time [{units['time']}]")
     for a in axes:
         a.grid(alpha=0.3)
+        for at in (marks or {}):
+            a.axvline(at, color="k", ls="--", lw=0.9)
+    for at, label in (marks or {}).items():
+        axes[0].annotate(label, (at, 1.0), xycoords=("data", "axes fraction"),
+                         xytext=(4, -12), textcoords="offset points", fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def plot_rig_series(path: str | Path, series, title: str) -> None:
+def plot_rig_series(path: str | Path, series, title: str,
+                    marks: dict[float, str] | None = None) -> None:
     """The rig's SI series (drill_sim.bag.series.RigSeries) in rpm, kN and kN m."""
     from ..core import RPM
     t = series.time_s - series.time_s[0]
@@ -47,4 +54,4 @@ def plot_rig_series(path: str | Path, series, title: str) -> None:
                      series.wob_n / 1e3, series.tob_nm / 1e3, series.surface_torque_nm / 1e3,
                      series.stuck,
                      units={"time": "s", "speed": "rpm", "force": "kN", "torque": "kN m"},
-                     title=title)
+                     title=title, marks=marks)

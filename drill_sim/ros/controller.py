@@ -44,6 +44,7 @@ from .topics import rclpy_qos
 NODE_NAME = "drill_sim_controller"
 CONTROL_LAWS = tuple(n for n in LAWS if n != "kinematic")
 DEFAULT_TORQUE_LIMIT_NM = 60e3            # the base drive's rating; set to the rig's limits
+MAX_CATCH_UP = 100                        # law steps for one sample after a gap in the stamps
 # (input, measured topic, exact topic): the rig's names, from its table
 INPUTS = (("speed", "~/measured/top_drive/twist", "~/top_drive/twist"),
           ("motor", "~/measured/top_drive/motor_wrench", "~/top_drive/motor_wrench"),
@@ -95,6 +96,7 @@ class ControllerNode(Node):
             raise SystemExit(f"{NODE_NAME}: inputs = {p['inputs']!r}: expected measured or exact")
         use = 1 if p["inputs"] == "measured" else 2
         self._pending: dict[int, list[float | None]] = {}
+        self._last: SurfaceMeasurement | None = None
         self._index = {}
         for i, entry in enumerate(INPUTS):
             t = rig_topic(entry[use])
@@ -112,11 +114,14 @@ class ControllerNode(Node):
         self.create_timer(p["diagnostics_period_s"], self._diagnose)
         self.manage_mode = p["manage_drive_mode"]
         self.mode_client = self.create_client(SetParameters, f"{self.rig}/set_parameters")
+        self._mode_request = None
+        self.create_timer(0.1, self._send_mode)
         self.msg = WrenchStamped()
         self.msg.header.frame_id = rig_topics.FRAME_TOP_DRIVE
         self.add_on_set_parameters_callback(self._on_parameters)
-        if self.manage_mode and self.core.enabled:
-            self._request_mode("torque")
+        if self.manage_mode and self.core.enabled:      # on once the rig's drive is in torque
+            self.core.set_enabled(False)
+            self._request_mode("torque", lambda: self.core.set_enabled(True))
 
     # ---- parameters ---------------------------------------------------------------------
     def _declare_all(self) -> dict[str, object]:
@@ -176,20 +181,39 @@ class ControllerNode(Node):
             self.core.replace_law(law, gains)
         if "enabled" in changed:
             enabled = bool(changed["enabled"])
-            if self.manage_mode and enabled != self.core.enabled:
-                self._request_mode("torque" if enabled else "speed")
-            self.core.set_enabled(enabled)
+            if not self.manage_mode or enabled == self.core.enabled:
+                self.core.set_enabled(enabled)
+            elif enabled:                    # on once the rig's drive takes torque commands
+                self._request_mode("torque", lambda: self.core.set_enabled(True))
+            else:
+                self.core.set_enabled(False)
+                self._request_mode("speed", None)
         return SetParametersResult(successful=True)
 
-    def _request_mode(self, mode: str) -> None:
-        """Ask the rig to put its drive in ``mode`` (bumpless at the rig)."""
-        if not self.mode_client.wait_for_service(timeout_sec=5.0):
-            self.get_logger().error(f"{self.rig}/set_parameters not available: top_drive_mode "
-                                    f"stays as it is (wanted {mode})")
+    def _request_mode(self, mode: str, then) -> None:
+        """Ask the rig to put its drive in ``mode`` (bumpless at the rig) as soon as its
+        parameter service is there; ``then()`` once it has."""
+        self._mode_request = (mode, then)
+        self._send_mode()
+
+    def _send_mode(self) -> None:
+        if self._mode_request is None or not self.mode_client.service_is_ready():
             return
+        mode, then = self._mode_request
+        self._mode_request = None
         value = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=mode)
-        self.mode_client.call_async(SetParameters.Request(
+        future = self.mode_client.call_async(SetParameters.Request(
             parameters=[ParameterMsg(name="top_drive_mode", value=value)]))
+
+        def done(f) -> None:
+            result = f.result()
+            if result is None or not result.results or not result.results[0].successful:
+                reason = "no answer" if result is None or not result.results \
+                    else result.results[0].reason
+                self.get_logger().error(f"the rig refused top_drive_mode = {mode}: {reason}")
+            elif then is not None:
+                then()
+        future.add_done_callback(done)
 
     # ---- the loop -----------------------------------------------------------------------
     def _on_setpoint(self, msg: TwistStamped) -> None:
@@ -218,7 +242,19 @@ class ControllerNode(Node):
         if not all(math.isfinite(v) for v in slot):
             self.get_logger().warn(f"sample at {stamp * 1e-9:.3f} s skipped: non-finite input")
             return
-        out = self.core.step(SurfaceMeasurement(stamp * 1e-9, speed, motor, surface))
+        m = SurfaceMeasurement(stamp * 1e-9, speed, motor, surface)
+        # The law runs on sim time: when the rig skipped ticks (real time on a busy machine)
+        # the law is stepped once per period h of the gap on measurements interpolated
+        # linearly from the previous sample, so its filters, derivative and integral keep
+        # their time and see no jump (at most MAX_CATCH_UP steps).
+        last, self._last = self._last, m
+        periods = 1 if last is None else round((m.time_s - last.time_s) / self.core.h_s)
+        periods = min(max(periods, 1), MAX_CATCH_UP)
+        for k in range(1, periods):
+            f = k / periods
+            self.core.step(SurfaceMeasurement(*(a + f * (b - a) for a, b in zip(last, m,
+                                                                                strict=True))))
+        out = self.core.step(m)
         if out is None:
             return
         self.msg.header.stamp = msg.header.stamp
