@@ -11,7 +11,7 @@ setup(
     version="0.1.0",
     packages=find_packages(exclude=["tests", "tests.*", "benchmarks"]),
     package_data={package_name: ["presets/*.yaml", "scenarios/*.yaml", "config/*.yaml",
-                                 "config/*.json", "config/*.xml"]},
+                                 "config/*.json", "config/*.xml", "sensor_profiles/*.yaml"]},
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
@@ -19,6 +19,7 @@ setup(
         ("share/" + package_name + "/scenarios", glob("drill_sim/scenarios/*.yaml")),
         ("share/" + package_name + "/config", glob("drill_sim/config/*.yaml")
          + glob("drill_sim/config/*.json") + glob("drill_sim/config/*.xml")),
+        ("share/" + package_name + "/sensor_profiles", glob("drill_sim/sensor_profiles/*.yaml")),
     ],
     python_requires=">=3.10",
     install_requires=[

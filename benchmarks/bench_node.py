@@ -13,7 +13,11 @@ in torque mode and the benchmark closing the loop like a controller: for every
 ~/top_drive/twist it receives it publishes a motor torque on ~/cmd/top_drive_torque (a PI on
 the top-drive speed, 60 rpm), so the node takes a command every tick.
 
+With --sensor-profile NAME every node runs that sensor profile (msg_docs/sensors.md);
+--rate-only prints only the 1000 Hz rate and CPU.
+
 Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30] [--top-drive-mode torque]
+         [--sensor-profile NAME] [--rate-only]
 """
 
 from __future__ import annotations
@@ -42,8 +46,11 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
+SENSORS: list[str] = []          # -p sensor_profile:=... for every node started
+
+
 def start(*args: str) -> subprocess.Popen:
-    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *args],
+    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *SENSORS, *args],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
@@ -180,7 +187,11 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--top-drive-mode", choices=("kinematic", "torque"),
                         default="kinematic")
+    parser.add_argument("--sensor-profile", default="ideal")
+    parser.add_argument("--rate-only", action="store_true")
     args = parser.parse_args()
+    SENSORS[:] = ["-p", f"sensor_profile:={args.sensor_profile}"]
+    print(f"sensor profile {args.sensor_profile}")
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     rclpy.init()
@@ -194,6 +205,10 @@ def main() -> None:
         rclpy.shutdown()
         return
     plain = rate_and_cpu(node, args.seconds)
+    if args.rate_only:
+        node.destroy_node()
+        rclpy.shutdown()
+        return
     with tempfile.TemporaryDirectory() as tmp:
         recording = rate_and_cpu(node, args.seconds, record=f"{tmp}/bag")
     print(f"CPU added by in-node recording: {100 * (recording - plain):.1f} % of one core")

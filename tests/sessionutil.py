@@ -8,6 +8,7 @@ from collections.abc import Iterable
 
 from drill_sim.bag.writer import BagWriter
 from drill_sim.core import RigSample, load_preset, session
+from drill_sim.core.sensors import session_sensors
 from drill_sim.ros.parameters import specs
 from drill_sim.wire.rig_messages import RigEncoders
 
@@ -22,9 +23,10 @@ def session_bag(path, ticks: int, *, rate_hz: float = 100.0, speedup: float = 10
     p.update(publish_clock=True, rate_hz=rate_hz, max_speed=True, record=str(path))
     rig = session.make_rig(p)
     session.start(rig, p)
+    sensors = session_sensors(p, rig.dt_s)
     meta = {"parameters": {k: str(v) for k, v in sorted(p.items())},
             "session": {"preset": "base", "node": node, "stamp_epoch_ns": "0",
-                        "events_topic": f"{node}/events"}}
+                        "events_topic": f"{node}/events", "step_s": repr(rig.dt_s)}}
     enc = RigEncoders(with_clock=False)
     topics = [t.under(node) for t in enc.topics]
     with BagWriter(path, metadata=meta, chunk_size=chunk_size,
@@ -36,8 +38,10 @@ def session_bag(path, ticks: int, *, rate_hz: float = 100.0, speedup: float = 10
             rig.advance_to(k / rate_hz)
             stamp = round(rig.time_s * 1e9)
             log = WALL0_NS + round(stamp / speedup)
-            for topic, data in zip(topics, enc.sample(stamp, rig.sample()), strict=True):
-                w.write(topic, data, log)
+            s = rig.sample()
+            data = enc.sample(stamp, s, sensors.measure(rig.time_s, s))
+            for topic, message in zip(topics, data, strict=True):
+                w.write(topic, message, log)
 
 
 def samples_bag(path, stamped: Iterable[tuple[int, RigSample]], *,

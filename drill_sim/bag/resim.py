@@ -5,6 +5,8 @@ run-time parameter changes (``<node>/events``) and every sample it published, in
 happened. The re-run starts the same rig (``core.session``), then walks the bag in that order:
 each command is accepted or refused by the node's rules, each event is redone, and before each
 recorded joint_states sample the model is advanced to that sample's step and compared with it.
+The sensors (``core.sensors``, the recorded profile and seed) measure each re-run sample as the
+node did, and the ``~/measured/`` messages that follow are compared with their reading.
 The model is deterministic and the node only advances it between samples, so the re-run is
 exact in both modes: in sim-time mode the ticks are fixed steps of simulated time; in
 real-time mode they came from the wall clock, and the re-run takes them from the stamps.
@@ -22,6 +24,8 @@ from pathlib import Path
 
 from ..core import NoSteadyDrilling, ParameterError, session
 from ..core.rig import Rig
+from ..core.sensor_profile import profile_from_dict
+from ..core.sensors import Measured, SensorBank, session_sensors
 from ..wire import cdr, rig_topics
 from .bag import Bag, opened
 from .errors import BagError
@@ -105,16 +109,23 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
     result = ResimResult(bag.path, "sim-time" if p.get("publish_clock") else "real-time",
                          meta["session"].get("preset", "?"))
     try:
-        rig = session.make_rig(p)
+        # the step the node used; bags from before it was recorded ran at dt_s itself
+        rig = session.make_rig(p, float(meta["session"].get("step_s", p["dt_s"])))
         session.start(rig, p)
-    except (ParameterError, NoSteadyDrilling, KeyError) as exc:
+        recorded = meta.get("sensors", {})
+        sensors = session_sensors(p, rig.dt_s, profile_from_dict(
+            recorded.get("name", "recorded"), json.loads(recorded["profile"]))
+            if "profile" in recorded else None)
+    except (ParameterError, NoSteadyDrilling, KeyError, ValueError) as exc:
         raise BagError(f"bag {bag.path}: the recorded parameters do not make a rig: {exc}") \
             from None
-    run = _Rerun(rig, p, epoch_ns, result)
+    run = _Rerun(rig, p, epoch_ns, result, sensors)
     total = max(found.topics[topics["joints"]].count, 1)
     handlers = {topics["joints"]: run.sample, topics["events"]: run.event,
                 rig_topics.topic("~/top_drive/motor_wrench").under(node): run.motor}
     handlers.update({t.under(node): partial(run.command, t.command) for t in rig_topics.COMMANDS})
+    handlers.update({t.under(node): partial(run.measured, t)
+                     for t in rig_topics.MEASURED_OUTPUTS if t.under(node) in found.topics})
     walked: list[str] = []
     for m in bag.messages(set(handlers), walked):
         handlers[m.topic](m.data)
@@ -127,8 +138,11 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
 class _Rerun:
     """The rig being re-run and the session state the node kept beside it."""
 
-    def __init__(self, rig: Rig, p: dict, epoch_ns: int, result: ResimResult) -> None:
+    def __init__(self, rig: Rig, p: dict, epoch_ns: int, result: ResimResult,
+                 sensors: SensorBank) -> None:
         self.rig, self.p, self.epoch_ns, self.result = rig, p, epoch_ns, result
+        self.sensors = sensors
+        self.reading: Measured | None = None     # the sensors' reading of the last sample
         self.offset_s = 0.0                      # simulated time before the last reset
         self.values_at: int | None = None        # byte offset of the joint arrays
         self.types = {t.command: t.type_name for t in rig_topics.COMMANDS}
@@ -152,6 +166,7 @@ class _Rerun:
         for name, (kind, j) in JOINT_FIELDS.items():
             self._compare(name, getattr(s, name), recorded[JOINT_ARRAY_START[kind] + j],
                           sim_time_s)
+        self.reading = self.sensors.measure(self.rig.time_s, s)
         self.result.samples += 1
 
     def motor(self, data: bytes) -> None:
@@ -160,10 +175,20 @@ class _Rerun:
         torque_nm = cdr.decode_stamped_vectors(data)[3][5]
         self._compare(MOTOR_TORQUE, self.rig.motor_torque_nm, torque_nm, sim_time_s)
 
+    def measured(self, t: rig_topics.RigTopic, data: bytes) -> None:
+        """A recorded ~/measured/ message against the sensors' reading of the re-run sample
+        it followed (a message before any sample, or one that cannot be decoded, counts as
+        different)."""
+        values = _measured_values(t, data)
+        for f in t.fields:
+            rerun = getattr(self.reading, f.sample) if self.reading is not None else math.nan
+            self._compare(f"measured {f.sample}", rerun, values.get(f.message, math.nan),
+                          self.offset_s + self.rig.time_s)
+
     def _compare(self, name: str, rerun: float, recorded: float, t: float) -> None:
         r = self.result
         diff = abs(rerun - recorded)
-        if not diff <= r.max_difference[name]:            # also catches NaN
+        if not diff <= r.max_difference.setdefault(name, 0.0):      # also catches NaN
             r.max_difference[name] = diff if not math.isnan(diff) else math.inf
             if r.max_difference[name] > r.worst[1]:
                 r.worst = (name, r.max_difference[name], t)
@@ -183,6 +208,7 @@ class _Rerun:
         if kind == "reset":
             self.offset_s += self.rig.time_s
             session.start(self.rig, self.p)
+            self.sensors.reset()
         elif kind == "parameters":
             new = dict(self.p)
             new.update({k: session.parse_value(v) for k, v in event["values"].items()})
@@ -190,3 +216,13 @@ class _Rerun:
             self.p = new
         self.result.events.append(kind)
 
+
+def _measured_values(t: rig_topics.RigTopic, data: bytes) -> dict[str, float]:
+    """The float64 fields of a recorded ~/measured/ message by path ({} if undecodable)."""
+    try:
+        if t.type_name in cdr.VECTOR_FIELDS:
+            six = cdr.decode_stamped_vectors(data)[3]
+            return dict(zip(cdr.VECTOR_FIELDS[t.type_name], six, strict=True))
+        return {"data": struct.unpack_from("<d", data, 4)[0]}
+    except (cdr.WireError, struct.error):
+        return {}

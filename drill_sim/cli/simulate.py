@@ -9,7 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import RPM, Trajectory
+from ..core import RPM, ParameterError, Trajectory
+from ..core.sensor_profile import CHANNELS, SensorProfile, load_profile
+from ..core.sensors import SensorBank
 from ..study.single import run_single
 from ..terminal import Progress
 from .case import Case, add_model_arguments, resolve_case
@@ -49,6 +51,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="figure of bit speed, WOB and TOB against time (.png, .pdf, .svg...)")
     parser.add_argument("--json", action="store_true",
                         help="print the summary as one JSON object (strict: null, never NaN)")
+    parser.add_argument("--sensor-profile", default=None,
+                        help="SI mode, with --out: also write what the rig's sensors show, "
+                             "measured_<channel> and fresh_<channel> columns, under this "
+                             "sensor profile (ideal, surface_rig, mud_pulse, wired_pipe or a "
+                             "profile YAML file), sampled on the CSV's rows")
+    parser.add_argument("--sensor-seed", type=int, default=None,
+                        help="seed of the sensors' noise, 0 to 2147483647; default 0")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
         output_file("--out", args.out)
     if args.plot is not None:
         plot_file("--plot", args.plot)
+    sensors = _resolve_sensors(args, case)
     gap, perturbation = resolve_start(args, case)
     drive = resolve_drive(args, case)
     settings = run_settings(case, timing, args.start, gap, perturbation, drive=drive,
@@ -77,9 +87,13 @@ def run(args: argparse.Namespace) -> int:
     summary = _summary(case, result.parts[-1], settings.start, duration, timing.window, dt,
                        drive)
     summary["string_model"] = settings.string_model
+    if sensors is not None:
+        summary.update(sensor_profile=sensors.name, sensor_seed=args.sensor_seed or 0)
 
     if keep_rows:
         columns = _columns(case, *result.parts)
+        if sensors is not None:
+            columns.update(_measured(case, sensors, args.sensor_seed or 0, interval, columns))
         if args.out is not None:
             _write_csv(args.out, columns)
         if args.plot is not None:
@@ -89,6 +103,40 @@ def run(args: argparse.Namespace) -> int:
     else:
         _print_summary(summary, args)
     return 0
+
+
+def _resolve_sensors(args: argparse.Namespace, case: Case) -> SensorProfile | None:
+    """The sensor profile of --sensor-profile (None without it), checked with --sensor-seed."""
+    if args.sensor_profile is None:
+        if args.sensor_seed is not None:
+            raise UsageError("--sensor-seed seeds the sensors' noise: expected "
+                             "--sensor-profile too")
+        return None
+    if not case.si:
+        raise UsageError("--sensor-profile measures SI quantities: expected SI mode "
+                         "(--preset, --rpm, --wob-kn), not --groups")
+    if args.out is None:
+        raise UsageError("--sensor-profile adds measured columns to the CSV: expected --out")
+    if args.sensor_seed is not None and not 0 <= args.sensor_seed <= 2**31 - 1:
+        raise UsageError(f"--sensor-seed {args.sensor_seed}: expected a whole number from 0 "
+                         "to 2147483647")
+    try:
+        return load_profile(args.sensor_profile)
+    except ParameterError as exc:
+        raise UsageError(f"--sensor-profile: {exc}") from None
+
+
+def _measured(case: Case, profile: SensorProfile, seed: int, interval_s: float,
+              columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """measured_<channel> and fresh_<channel> (0/1) columns: the sensors of ``profile`` read
+    each CSV row as a tick (rows ``interval_s`` [s] apart; the hook load is the run's)."""
+    exact = dict(columns)
+    hook_n = case.preset.rig.submerged_weight_n - case.w0 * case.preset.rig.scales.force_n
+    exact["hook_load_n"] = np.full(len(columns["time_s"]), hook_n)
+    read = SensorBank(profile, interval_s, seed).measure_series(columns["time_s"], exact)
+    out = {f"measured_{c}": read[c] for c in CHANNELS}
+    out.update({f"fresh_{c}": read[f"fresh_{c}"].astype(int) for c in CHANNELS})
+    return out
 
 
 def _check_rows(args: argparse.Namespace, duration: float, dt: float, interval: float,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .lockstep import LockstepStatus
 from .pacing import TickStats
 from .rig import RigSample
 
@@ -67,13 +68,15 @@ class Status:
 def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *,
                paused: bool, record_error: str | None, command_age_s: float,
                command_timeout_s: float, rate_hz: float, max_speed: bool,
-               sim_time_s: float, commands: CommandCounts = CommandCounts()) -> Status:
+               sim_time_s: float, commands: CommandCounts = CommandCounts(),
+               lockstep: LockstepStatus | None = None) -> Status:
     """The status over one diagnostics window. Conditions: ERROR when recording failed;
     WARN, while running, when ticks overran in real-time mode and fewer than SLOW_TICKS of
-    ``rate_hz`` [Hz] came, when commands were lost in the window, and when no command came
-    for ``command_timeout_s`` [s]; ``paused`` (OK) while paused. ``metrics``: the rig's
-    window metrics (``ssi``, ``stick_fraction``, ``bounce_fraction``); ``sim_time_s``:
-    session time [s]."""
+    ``rate_hz`` [Hz] (the timer ticks expected to publish) came, when real-time ticks
+    stalled in the window, when commands were lost in the window, when no command came for
+    ``command_timeout_s`` [s], and in lockstep when a tick waited longer than its timeout;
+    ``paused`` (OK) while paused. ``metrics``: the rig's window metrics (``ssi``,
+    ``stick_fraction``, ``bounce_fraction``); ``sim_time_s``: session time [s]."""
     name = drilling_regime(ssi=metrics["ssi"],
                            stuck=metrics["stick_fraction"] > 0.0 or sample.stick_slip,
                            off_bottom_fraction=metrics["bounce_fraction"],
@@ -87,6 +90,15 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
     else:
         if ticks.overruns and not max_speed and ticks.ticks < SLOW_TICKS * rate_hz * ticks.wall_s:
             found.append((WARN, f"tick rate {ticks.rate_hz:.0f} Hz below {rate_hz:g} Hz"))
+        if ticks.stalls and not max_speed:
+            found.append((WARN, f"{ticks.stalls} ticks stalled in the last {ticks.wall_s:.1f} s "
+                                f"(longest {ticks.period_max_s * 1e3:.1f} ms); the rig "
+                                "advanced the ticks they missed at once"))
+        if lockstep is not None and lockstep.waiting_s > lockstep.timeout_s:
+            found.append((WARN, f"lockstep: waiting {lockstep.waiting_s:.1f} s for "
+                                f"{', '.join(lockstep.missing)} stamped "
+                                f"{lockstep.stamp_ns * 1e-9:.6f} s (timeout "
+                                f"{lockstep.timeout_s:g} s)"))
         if commands.lost_in_window:
             found.append((WARN, f"{commands.lost_in_window} commands lost in the last "
                                 f"{ticks.wall_s:.1f} s (they came faster than the ticks)"))
@@ -100,6 +112,7 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
         "tick_period_p99_ms": f"{ticks.period_p99_s * 1e3:.3f}",
         "tick_period_max_ms": f"{ticks.period_max_s * 1e3:.3f}",
         "overruns": str(ticks.overruns),
+        "longest_stall_ms": f"{ticks.longest_stall_s * 1e3:.3f}",
         "real_time_factor": f"{ticks.real_time_factor:.3f}",
         "regime": name,
         "ssi": f"{metrics['ssi']:.3f}",
@@ -111,4 +124,7 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
         "commands_lost": str(commands.lost),
         "sim_time_s": f"{sim_time_s:.3f}",
         "paused": str(paused).lower(),
-    })
+    } | ({} if lockstep is None else {
+        "lockstep_waiting_s": f"{lockstep.waiting_s:.3f}",
+        "lockstep_other_stamps": str(lockstep.other_stamps),
+    }))

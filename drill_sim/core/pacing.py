@@ -1,11 +1,15 @@
-"""When the rig node's ticks are due, how far each advances the rig, and the tick statistics
-for /diagnostics. No ROS here, so the pacing is tested with a fake clock.
+"""When the rig node's ticks are due, how many each timer tick advances, and the tick
+statistics for /diagnostics. No ROS here, so the pacing is tested with a fake clock.
 
-Real-time mode: simulated time follows the wall clock times ``real_time_factor`` from an
-anchor, set again at start, on resume, reset and a factor change, and when the rig fell more
-than 0.1 s of simulated time behind: that backlog is dropped rather than caught up in a burst.
-Max-speed mode (``max_speed`` with ``/clock``): each tick advances 1/``rate_hz`` of simulated
-time, back to back. Times are rig times [s] (``Rig.time_s``, which restarts on reset).
+Simulated time moves in whole ticks of 1/``rate_hz`` in every mode (the step divides the tick,
+``core.session.step_s``), so every sample is stamped on that grid.
+Real-time mode: the ticks due are those the wall clock times ``real_time_factor`` has reached
+since an anchor, rounded to the nearest (the timer's jitter, under a quarter period, never
+moves a tick); the anchor is set again at start, on resume, reset, a rate or factor change,
+and when the rig fell more than 0.1 s of simulated time behind: that backlog is dropped rather
+than caught up in a burst. At factor 1 a timer tick advances one tick; one the machine delayed
+(a stall: more than 1.5 periods after the one before) advances the ticks it missed at once.
+Max-speed and lockstep modes: each timer tick advances exactly one tick, back to back.
 """
 
 from __future__ import annotations
@@ -29,8 +33,10 @@ class TickStats:
     wall_s: float            # window length [s], > 0
     sim_s: float             # simulated time advanced [s]
     period_p99_s: float      # 99th percentile of the timer's periods [s]; nan without any
-    overruns: int            # since start
+    overruns: int            # since start: real-time ticks later than OVERRUN_PERIODS (stalls)
     period_max_s: float = math.nan   # the longest period [s]; nan without any
+    stalls: int = 0          # overruns (stalls) in this window
+    longest_stall_s: float = 0.0     # the longest stalled period since start [s]; 0: none
 
     @property
     def rate_hz(self) -> float:
@@ -42,7 +48,7 @@ class TickStats:
 
 
 class Pacer:
-    """The node's clock discipline: ``tick_started`` on every timer tick, ``target`` and
+    """The node's clock discipline: ``tick_started`` on every timer tick, ``due`` and
     ``advanced`` around each advance of the rig, ``window`` once per diagnostics period.
 
     window_s: the diagnostics period [s], which sizes the buffer of tick periods; clock: the
@@ -58,31 +64,31 @@ class Pacer:
         self._n_periods = 0
         self._longest = math.nan
         self.overruns = self.ticks = 0
+        self.longest_stall_s = 0.0
+        self._overruns_before = 0
         self._last_tick: float | None = None
-        self._target = rig_time_s
-        self.anchor(rig_time_s)
-        self._window = (self._wall0, 0, rig_time_s)      # wall, ticks, rig time at its start
+        self.anchor()
+        self._window = (self._clock(), 0, rig_time_s)    # wall, ticks, rig time at its start
 
-    def configure(self, rate_hz: float, real_time_factor: float, max_speed: bool,
-                  rig_time_s: float) -> None:
-        """New settings at run time; a new real-time factor counts from now."""
-        changed_factor = real_time_factor != self.real_time_factor
+    def configure(self, rate_hz: float, real_time_factor: float, max_speed: bool) -> None:
+        """New settings at run time; a new rate or real-time factor counts from now."""
+        if (rate_hz, real_time_factor) != (self.rate_hz, self.real_time_factor):
+            self.anchor()
         self.rate_hz, self.real_time_factor, self.max_speed = rate_hz, real_time_factor, max_speed
         if self._buffer_size(rate_hz) > self._periods.size:
             grown = np.zeros(self._buffer_size(rate_hz))
             grown[:self._n_periods] = self._periods[:self._n_periods]
             self._periods = grown
-        if changed_factor:
-            self.anchor(rig_time_s)
 
-    def anchor(self, rig_time_s: float) -> None:
-        """Simulated time ``rig_time_s`` is now: real time counts from here."""
-        self._wall0, self._sim0 = self._clock(), rig_time_s
+    def anchor(self) -> None:
+        """Real time counts again from the next timer tick, which advances the ticks of one
+        timer period (one at factor 1): so the grid of due ticks follows the timer's phase."""
+        self._anchored = False
 
     def reset(self, rig_time_s: float) -> None:
-        """The rig was reset to ``rig_time_s``: anchor there, and measure this window's
+        """The rig was reset to ``rig_time_s``: anchor again, and measure this window's
         simulated time from there."""
-        self.anchor(rig_time_s)
+        self.anchor()
         self._window = (self._window[0], self._window[1], rig_time_s)
 
     def _buffer_size(self, rate_hz: float) -> int:
@@ -91,9 +97,8 @@ class Pacer:
 
     @property
     def tick_s(self) -> float:
-        """Simulated time of one nominal tick [s] (what ``~/step`` advances): 1/``rate_hz``
-        times the real-time factor in real time, 1/``rate_hz`` at max speed."""
-        return 1.0 / self.rate_hz * (1.0 if self.max_speed else self.real_time_factor)
+        """Simulated time of one tick [s] in every mode (what ``~/step`` advances)."""
+        return 1.0 / self.rate_hz
 
     def tick_started(self) -> None:
         """Every timer tick, paused or not: the period since the last one."""
@@ -107,23 +112,30 @@ class Pacer:
                 self._longest = period
             if period > OVERRUN_PERIODS / self.rate_hz and not self.max_speed:
                 self.overruns += 1
+                self.longest_stall_s = max(self.longest_stall_s, period)
         self._last_tick = now
 
-    def target(self, rig_time_s: float) -> float:
-        """The rig time to advance to in this tick [s], never more than BEHIND_S times the
-        real-time factor (plus a tick) ahead of ``rig_time_s``."""
+    def due(self) -> int:
+        """How many whole ticks this timer tick advances: one at max speed (and in lockstep);
+        in real time those due by the wall clock, at most BEHIND_S of simulated time (times
+        the real-time factor) plus one tick; a larger backlog is dropped (anchored again)."""
         if self.max_speed:
-            self._target = rig_time_s + 1.0 / self.rate_hz
-        else:
-            self._target = self._sim0 + (self._clock() - self._wall0) * self.real_time_factor
-        return min(self._target, rig_time_s + BEHIND_S * self.real_time_factor
-                   + 1.0 / self.rate_hz)
+            return 1
+        now = self._clock()
+        per_wall_s = self.real_time_factor * self.rate_hz         # ticks a wall second
+        if not self._anchored:
+            self._wall0, self._done, self._anchored = now - 1.0 / self.rate_hz, 0, True
+        due = math.floor((now - self._wall0) * per_wall_s + 0.5) - self._done
+        limit = math.ceil(BEHIND_S * per_wall_s) + 1
+        if due > limit:
+            self.anchor()
+            return limit
+        self._done += max(due, 0)
+        return max(due, 0)
 
-    def advanced(self, rig_time_s: float) -> None:
-        """The tick advanced the rig to ``rig_time_s``: count it, drop a backlog."""
-        if self._target - rig_time_s > BEHIND_S * self.real_time_factor:
-            self.anchor(rig_time_s)
-        self.ticks += 1
+    def advanced(self, ticks: int = 1) -> None:
+        """The timer tick advanced the rig by ``ticks`` ticks (and published once)."""
+        self.ticks += 1 if ticks > 0 else 0
 
     def window(self, rig_time_s: float) -> TickStats:
         """The statistics since the last window (or the start); a new window starts."""
@@ -134,5 +146,6 @@ class Pacer:
         longest, self._longest = self._longest, math.nan
         self._n_periods = 0
         self._window = (now, self.ticks, rig_time_s)
+        stalls, self._overruns_before = self.overruns - self._overruns_before, self.overruns
         return TickStats(self.ticks - ticks0, max(now - wall0, 1e-9), rig_time_s - sim0, p99,
-                         self.overruns, longest)
+                         self.overruns, longest, stalls, self.longest_stall_s)

@@ -71,9 +71,37 @@ def top_drive_parameters(values: dict[str, object]) -> TopDriveParameters:
     return TopDriveParameters(**d)
 
 
-def make_rig(p: dict[str, object]) -> Rig:
-    """The rig of a session's parameters, not yet started."""
-    return Rig(rig_parameters(p), dt_s=p["dt_s"], stick_window_s=p["stick_slip_window_s"],
+def steps_per_tick(tick_s: float, dt_s: float) -> int:
+    """The fewest whole steps of at most ``dt_s`` [s] that make one tick of ``tick_s`` [s]."""
+    return max(1, math.ceil(tick_s / dt_s * (1.0 - 1e-12)))
+
+
+def step_s(p: dict[str, object]) -> float:
+    """The session's integration step [s]: the largest divisor of the tick 1/``rate_hz`` that
+    is not above ``dt_s``, so that every tick advances exactly 1/``rate_hz`` of simulated time
+    (at 1000 Hz and ``dt_s`` 105 us: ten steps of 100 us) and the model's stability limit,
+    which ``dt_s`` respects, still holds."""
+    tick_s = 1.0 / p["rate_hz"]
+    return tick_s / steps_per_tick(tick_s, p["dt_s"])
+
+
+def tick_refusal(rate_hz: float, dt_s: float) -> str | None:
+    """Why the session's step ``dt_s`` [s] (fixed at start) cannot make ticks of 1/``rate_hz``,
+    or None: a tick must be a whole number of steps."""
+    steps = rate_hz * dt_s
+    n = round(1.0 / steps) if steps > 0 else 0
+    if n >= 1 and abs(n * steps - 1.0) <= 1e-9:
+        return None
+    return (f"rate_hz = {rate_hz:g}: a tick 1/rate_hz must be a whole number of the session's "
+            f"step {dt_s:.6g} s (chosen at start from rate_hz and dt_s); expected a rate whose "
+            "tick is a whole number of steps, e.g. the start rate divided by a whole number")
+
+
+def make_rig(p: dict[str, object], dt_s: float | None = None) -> Rig:
+    """The rig of a session's parameters, not yet started; its step is ``step_s(p)`` unless
+    ``dt_s`` [s] is given (a recorded session's own step)."""
+    return Rig(rig_parameters(p), dt_s=step_s(p) if dt_s is None else dt_s,
+               stick_window_s=p["stick_slip_window_s"],
                hoist_speed_limit_m_s=p["hoist_speed_limit_m_s"],
                top_drive=top_drive_parameters(p))
 
@@ -218,6 +246,8 @@ def apply_changes(rig: Rig, old: dict[str, object], new: dict[str, object]) -> s
     """Bring the rig to the parameter values ``new`` (from ``old``); the names that changed.
     Raises ParameterError, leaving the rig as it was, if the new values are refused."""
     changed = {k for k in new if new[k] != old.get(k)}
+    if "rate_hz" in changed and (why := tick_refusal(new["rate_hz"], rig.dt_s)) is not None:
+        raise ParameterError(why)
     old_drive = rig.top_drive
     if changed & set(TOP_DRIVE_FIELDS):
         rig.set_top_drive(top_drive_parameters(new))        # a change of mode is bumpless

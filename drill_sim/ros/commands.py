@@ -61,6 +61,19 @@ class CommandInbox:
         self.limit = limit or max(t.qos_for(reliability).depth for t in rig_topics.COMMANDS)
         self.received = self.lost = self.undecodable = 0
         self._last_sequence: dict[str, int] = {}
+        self._context = node.context.handle
+        self._wait_set = _rclpy.WaitSet(len(self._subs), 0, 0, 0, 0, 0, self._context)
+
+    def wait(self, timeout_s: float) -> None:
+        """Block until a command has arrived on any topic, or ``timeout_s`` [s] passed:
+        the middleware wakes the thread, so a lockstep wait costs no CPU and no polling
+        delay."""
+        ws = self._wait_set
+        with self._context:
+            ws.clear_entities()
+            for _, handle, _ in self._subs:
+                ws.add_subscription(handle)
+            ws.wait(max(0, int(timeout_s * 1e9)))
 
     def take(self) -> list[Command]:
         """What arrived since the last call, at most ``limit`` per topic, each topic's in
@@ -92,6 +105,7 @@ class CommandInbox:
             self.lost += sequence - last - 1
 
     def destroy(self) -> None:
+        self._wait_set.destroy_when_not_in_use()
         for _, handle, _ in self._subs:
             handle.destroy_when_not_in_use()
         self._subs = []

@@ -1,12 +1,14 @@
 """``drill_sim_node``: the rig as a ROS 2 node. Surface commands in, bit and surface response out.
 
-A thin adapter: each tick advances the core ``Rig`` to the simulated time the ``Pacer`` gives
-and publishes its sample, encoded once (``wire.rig_messages``). Topics and services come from
-the table in ``wire.rig_topics``; the rules live in ``core``: commands and parameter changes in
-``session``, pacing in ``pacing``, the diagnostics policy in ``diagnostics``; recording in
-``recorder``. Commands are taken by the tick itself (``commands``: a bounded number per tick,
-so a flood of them cannot stop the clock), validated and held (zero-order hold) from that tick
-on; a refused command never reaches the model.
+A thin adapter: each tick advances the core ``Rig`` by the whole ticks of 1/``rate_hz`` the
+``Pacer`` gives and publishes its sample, encoded once (``wire.rig_messages``). Topics and
+services come from the table in ``wire.rig_topics``; the rules live in ``core``: commands and
+parameter changes in ``session``, pacing in ``pacing``, the diagnostics policy in
+``diagnostics``, the lockstep wait in ``lockstep``; recording in ``recorder``. Commands are
+taken by the tick itself (``commands``: a bounded number per tick, so a flood of them cannot
+stop the clock), validated and held (zero-order hold) from that tick on; a refused command
+never reaches the model. In lockstep the loop waits, blocked in the middleware, for each
+tick's commands before it advances.
 """
 
 from __future__ import annotations
@@ -25,8 +27,10 @@ from std_srvs.srv import SetBool, Trigger
 
 from ..core import NoSteadyDrilling, ParameterError, session
 from ..core.diagnostics import CommandCounts, rig_status
+from ..core.lockstep import Lockstep
 from ..core.pacing import Pacer
 from ..core.rig import RigSample
+from ..core.sensors import session_sensors
 from ..wire import rig_topics
 from ..wire.rig_messages import RigEncoders
 from ..wire.rig_topics import RigTopic
@@ -37,6 +41,7 @@ from .stopping import init_stoppable
 from .topics import message_class, rclpy_qos, service_class
 
 SWITCH_INTERVAL_S = 5e-4
+SERVE_PERIOD_S = 1e-3        # max speed and lockstep: services, parameters, diagnostics
 
 
 class RigNode(Node):
@@ -48,6 +53,7 @@ class RigNode(Node):
             self.preset, self._specs, self.p = parameters.declare(self)
             self.rig = session.make_rig(self.p)
             session.start(self.rig, self.p)
+            self.sensors = session_sensors(self.p, self.rig.dt_s)   # what ~/measured/ shows
         except (ParameterError, NoSteadyDrilling) as exc:
             raise SystemExit(f"drill_sim_node: {exc}") from None
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -65,15 +71,20 @@ class RigNode(Node):
             self.create_service(service_class(t.type_name), t.name, handlers[t.name])
 
         self._offset_s = 0.0                     # simulated time before the last reset
-        self.paused = False
+        self.paused = bool(self.p["start_paused"])
+        self._steps_per_tick = self._tick_steps(self.p["rate_hz"])
+        self._last_data: list[bytes] = []         # the last sample's messages as published
+        self.lockstep = Lockstep(tuple("~/" + n for n in self.p["lockstep_topics"]),
+                                 self.p["lockstep_timeout_s"]) if self.p["lockstep"] else None
         self._epoch_ns = time.time_ns()          # stamps = epoch + sim time without /clock
         self.recorder = SessionRecorder(
             p=self.p, rig=self.rig, preset=self.preset.name,
             node=self.get_fully_qualified_name(), resolve=self.resolve_topic_name,
             stamp_epoch_ns=0 if self.with_clock else self._epoch_ns,
-            logger=self.get_logger()) if self.p["record"] else None
-        self.pacer = Pacer(self.p["rate_hz"], self.p["real_time_factor"], bool(self.p["max_speed"]),
-                           self.p["diagnostics_period_s"], self.rig.time_s)
+            logger=self.get_logger(), sensors=self.sensors.profile) if self.p["record"] else None
+        self.pacer = Pacer(self.p["rate_hz"], self.p["real_time_factor"],
+                           self._back_to_back(self.p), self.p["diagnostics_period_s"],
+                           self.rig.time_s)
         self._cmd_wall = time.monotonic()
         self.timer = None
         if not self.pacer.max_speed:
@@ -81,10 +92,27 @@ class RigNode(Node):
         self.create_timer(self.p["diagnostics_period_s"], self.publish_diagnostics)
         self.get_logger().info(
             f"rig '{self.preset.name}' ready: t* = {self.rig.scales.time_s:.3f} s, "
-            f"dt = {self.rig.dt_s:.3g} s, {self.p['rate_hz']:g} Hz, real-time factor "
-            f"{'max' if self.pacer.max_speed else self.p['real_time_factor']}, "
-            f"{'publishing /clock' if self.with_clock else 'wall-clock stamps'}")
+            f"dt = {self.rig.dt_s:.4g} s ({self._steps_per_tick} a tick), {self.p['rate_hz']:g} "
+            f"Hz, {self._pace_words()}, "
+            f"{'publishing /clock' if self.with_clock else 'wall-clock stamps'}, sensors "
+            f"'{self.sensors.profile.name}' (seed {self.sensors.seed})"
+            f"{', paused' if self.paused else ''}")
         self.get_logger().info(f"rig figures: {session.figures_line(self.rig.params)}")
+
+    def _pace_words(self) -> str:
+        if self.lockstep is not None:
+            return "lockstep on " + ", ".join(self.p["lockstep_topics"])
+        return "real-time factor " + ("max" if self.pacer.max_speed
+                                      else f"{self.p['real_time_factor']:g}")
+
+    @staticmethod
+    def _back_to_back(p: dict) -> bool:
+        """Ticks back to back, one tick each (max speed, lockstep), not paced by a timer."""
+        return bool(p["max_speed"]) or bool(p["lockstep"])
+
+    def _tick_steps(self, rate_hz: float) -> int:
+        """Steps of the session's step in one tick of 1/``rate_hz`` (a whole number)."""
+        return round(1.0 / (rate_hz * self.rig.dt_s))
 
     def _publisher(self, t: RigTopic) -> Publisher:
         return self.create_publisher(message_class(t.type_name), t.name,
@@ -103,27 +131,81 @@ class RigNode(Node):
 
     # ---- the tick ----------------------------------------------------------------------
     def tick(self) -> None:
+        """A timer tick (real time) or a max-speed tick: take the commands, advance the ticks
+        due, publish."""
         self.pacer.tick_started()
         self.take_commands()
         if self.paused:
             return
+        ticks = self.pacer.due()
+        if ticks and self.advance(ticks):
+            self.pacer.advanced(ticks)
+            self.publish_sample(self.rig.sample())
+
+    def advance(self, ticks: int) -> bool:
+        """Advance the rig by exactly ``ticks`` ticks of 1/``rate_hz``; False (and paused) if
+        the model refuses a step."""
         try:
-            self.rig.advance_to(self.pacer.target(self.rig.time_s))
+            self.rig.advance_steps(ticks * self._steps_per_tick)
         except ParameterError as exc:   # a step the model refuses: hold the state, say why
             self.paused = True
             self.get_logger().error(f"simulation paused: {exc}; change the commands or "
                                     "parameters, then resume with ~/pause false or ~/reset")
-            return
-        self.pacer.advanced(self.rig.time_s)
-        self.publish_sample(self.rig.sample())
+            return False
+        return True
 
     def publish_sample(self, s: RigSample) -> None:
-        """Encode the sample once; publish those bytes and record the very same bytes."""
-        data = self._enc.sample(self.stamp_ns(), s)
+        """Measure the sample, encode both once; publish those bytes and record the very same
+        bytes. In lockstep the rig then waits for this tick's commands."""
+        stamp = self.stamp_ns()
+        self._last_data = data = self._enc.sample(stamp, s,
+                                                  self.sensors.measure(self.rig.time_s, s))
         for pub, raw in zip(self._outputs, data, strict=True):
             pub.publish(raw)
         if self.recorder is not None:
             self.recorder.record_outputs(data)
+        if self.lockstep is not None:
+            self.lockstep.wait_for(stamp, time.monotonic())
+
+    # ---- lockstep ----------------------------------------------------------------------
+    def run_lockstep(self, executor: EventsExecutor, stop) -> None:
+        """Publish a tick, wait for a command stamped with its time on every lockstep topic
+        (blocked in the middleware: no CPU spent), advance one tick, and so on; services,
+        parameters and diagnostics are served once per wall millisecond and while paused."""
+        ls = self.lockstep
+        next_serve = 0.0
+        while not stop:
+            if self.paused:
+                executor.spin_once(timeout_sec=SERVE_PERIOD_S)
+                self.take_commands()             # still taken and held while paused
+                continue
+            if ls.stamp_ns is None:              # tick 0, once running
+                self.publish_sample(self.rig.sample())
+            self.take_commands()
+            now = time.monotonic()
+            if ls.complete:
+                self.pacer.tick_started()        # the periods: wall time per lockstep tick
+                if self.advance(1):
+                    self.pacer.advanced(1)
+                    self.publish_sample(self.rig.sample())
+            else:
+                if ls.overdue(now):
+                    self._lockstep_overdue(now)
+                self.commands.wait(min(max(next_serve - now, 0.0), ls.until_overdue(now)))
+            if now >= next_serve:
+                executor.spin_once(timeout_sec=0.0)
+                next_serve = now + SERVE_PERIOD_S
+
+    def _lockstep_overdue(self, now: float) -> None:
+        """The tick waited ``lockstep_timeout_s``: say for what, and publish it again (not
+        recorded again) so a controller that started or restarted late can answer it."""
+        st = self.lockstep.status(now)
+        self.get_logger().warning(
+            f"lockstep: waiting {st.waiting_s:.1f} s for a command stamped "
+            f"{st.stamp_ns * 1e-9:.6f} s on {', '.join(st.missing)}; publishing that tick "
+            "again and waiting on (the rig never advances without its controller)")
+        for pub, raw in zip(self._outputs, self._last_data, strict=True):
+            pub.publish(raw)
 
     # ---- commands ----------------------------------------------------------------------
     def take_commands(self) -> None:
@@ -142,6 +224,8 @@ class RigNode(Node):
         for c in batch:
             if self.recorder is not None:
                 self.recorder.record_command(c.topic, c.data, c.sec, c.nanosec)
+            if self.lockstep is not None:
+                self.lockstep.offer(c.topic.name, c.sec * 1_000_000_000 + c.nanosec)
             refusal = session.apply_command(self.rig, self.p, c.topic.command, c.frame_id, c.six)
             if refusal is None:
                 accepted[c.topic.name] = accepted.get(c.topic.name, 0) + 1
@@ -165,6 +249,7 @@ class RigNode(Node):
         if self.recorder is not None:
             self.recorder.record_event("reset", self.sim_time_s)
         self._offset_s = offset
+        self.sensors.reset()
         self.pacer.reset(self.rig.time_s)
         self.publish_sample(self.rig.sample())
         response.success = True
@@ -173,7 +258,7 @@ class RigNode(Node):
 
     def _on_pause(self, request: SetBool.Request, response: SetBool.Response):
         if self.paused and not request.data:
-            self.pacer.anchor(self.rig.time_s)
+            self.pacer.anchor()
         self.paused = bool(request.data)
         response.success = True
         response.message = "paused" if self.paused else "running"
@@ -183,7 +268,9 @@ class RigNode(Node):
         if not self.paused:
             response.success, response.message = False, "step works only while paused"
             return response
-        self.rig.advance_to(self.rig.time_s + self.pacer.tick_s)
+        if not self.advance(1):
+            response.success, response.message = False, "the model refused the step"
+            return response
         self.publish_sample(self.rig.sample())
         response.success = True
         response.message = f"stepped to t = {self.sim_time_s:.6f} s"
@@ -212,8 +299,10 @@ class RigNode(Node):
         if changed and self.recorder is not None:
             self.recorder.record_event("parameters", self.sim_time_s,
                                        {k: str(new[k]) for k in sorted(changed)})
-        self.pacer.configure(new["rate_hz"], new["real_time_factor"], bool(new["max_speed"]),
-                             self.rig.time_s)
+        self.pacer.configure(new["rate_hz"], new["real_time_factor"], self._back_to_back(new))
+        self._steps_per_tick = self._tick_steps(new["rate_hz"])
+        if self.lockstep is not None:
+            self.lockstep.timeout_s = new["lockstep_timeout_s"]
         if changed & set(parameters.SPLITS) and self.recorder is not None:
             self.recorder.set_split(new["record_split_duration_s"],
                                     new["record_split_size_bytes"])
@@ -230,11 +319,14 @@ class RigNode(Node):
         ticks = self.pacer.window(self.rig.time_s)
         metrics = self.rig.metrics()
         self.rig.reset_metrics_window()
+        expected_hz = self.p["rate_hz"] * (1.0 if self.pacer.max_speed
+                                           else min(1.0, self.p["real_time_factor"]))
         status = rig_status(
             self.rig.sample(), metrics, ticks, paused=self.paused,
             record_error=self.recorder.error if self.recorder is not None else None,
             command_age_s=now - self._cmd_wall, command_timeout_s=self.p["command_timeout_s"],
-            rate_hz=self.p["rate_hz"], max_speed=self.pacer.max_speed,
+            rate_hz=expected_hz, max_speed=self.pacer.max_speed,
+            lockstep=None if self.lockstep is None else self.lockstep.status(now),
             sim_time_s=self.sim_time_s, commands=CommandCounts(
                 self.commands.received, self.superseded, self.commands.lost,
                 self.commands.lost - self._lost_before))
@@ -267,7 +359,9 @@ def main(args: list[str] | None = None) -> int:
         node.rig.warm_up()   # load the compiled kernel before the first tick is due
         # EventsExecutor.spin() does not dispatch timers in this rclpy; spin_once() does, at
         # 1 kHz with p99 period ~1.08 ms and a fifth of the CPU of SingleThreadedExecutor.
-        if node.pacer.max_speed:
+        if node.lockstep is not None:
+            node.run_lockstep(executor, stop)
+        elif node.pacer.max_speed:
             # ticks back to back, each taking the commands that came; services, parameters
             # and diagnostics once per wall millisecond; paused, a tick per wall millisecond
             next_spin = 0.0

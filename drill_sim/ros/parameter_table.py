@@ -15,9 +15,12 @@ from dataclasses import dataclass
 from ..core import Preset
 from ..core.simulator import DEFAULT_DT
 from ..core.top_drive import MODES as TOP_DRIVE_MODES
+from ..wire import rig_topics
 
 MIB = 1 << 20
-BOOL, INT, FLOAT, STR = bool, int, float, str
+BOOL, INT, FLOAT, STR, NAMES = bool, int, float, str, list
+# the command topics a lockstep tick can wait for, as lockstep_topics names them
+LOCKSTEP_CHOICES = tuple(t.name[2:] for t in rig_topics.COMMANDS)
 
 
 @dataclass(frozen=True)
@@ -48,6 +51,8 @@ class Spec:
             return "true or false"
         if self.kind is STR:
             return "one of " + ", ".join(self.choices) if self.choices else "text"
+        if self.kind is NAMES:
+            return "a list of one or more of " + ", ".join(self.choices) + ", each once"
         what = "a whole number" if self.kind is INT else "a finite number"
         if self.low is None:
             return what
@@ -59,6 +64,8 @@ class Spec:
         """(the value in the parameter's type, None), or (value, why it is refused). Integers
         are taken for real numbers, and whole real numbers for integers."""
         kind = self.kind
+        if kind is NAMES:
+            return self._check_names(value)
         if kind is FLOAT and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
         elif kind is INT and isinstance(value, float) and value.is_integer():
@@ -75,8 +82,21 @@ class Spec:
             ok = low <= value <= self.high
         if ok:
             return value, None
+        return value, self._refusal(value)
+
+    def _refusal(self, value: object) -> str:
         why = f" ({self.why})" if self.why else ""
-        return value, f"{self.name} = {value!r}: expected {self.expected()}{why}"
+        return f"{self.name} = {value!r}: expected {self.expected()}{why}"
+
+    def _check_names(self, value: object) -> tuple[object, str | None]:
+        """A list of names from ``choices`` (a single name is a list of one; a leading ``~/``
+        is dropped), each once."""
+        names = [value] if isinstance(value, str) else value
+        if isinstance(names, (list, tuple)) and all(isinstance(n, str) for n in names):
+            names = [n[2:] if n.startswith("~/") else n for n in names]
+            if names and len(set(names)) == len(names) and set(names) <= set(self.choices):
+                return names, None
+        return value, self._refusal(value)
 
 
 def _number(x: float, kind: type) -> str:
@@ -135,9 +155,21 @@ def specs(preset: Preset) -> list[Spec]:
              "clock; " + START_ONLY),
         Spec("max_speed", False, "with publish_clock: step as fast as possible",
              read_only="it chooses the node's tick loop; " + START_ONLY),
-        Spec("dt_s", DEFAULT_DT * t_star, "fixed integration step", "s", 1e-7, 0.01,
+        Spec("dt_s", DEFAULT_DT * t_star, "largest integration step; the step used is the "
+             "largest divisor of the tick 1/rate_hz not above it", "s", 1e-7, 0.01,
              "the model's step must stay well below t* (0.21 s on base)",
              read_only="the step is fixed for a session (bag resim re-runs it); " + START_ONLY),
+        Spec("lockstep", False, "with publish_clock: after each tick wait for a command "
+             "stamped with its time on each of lockstep_topics, then advance (msg_docs/node.md, "
+             "Lockstep)", read_only="it chooses the node's tick loop; " + START_ONLY),
+        Spec("lockstep_topics", ["cmd/top_drive"], "the command topics a lockstep tick waits "
+             "for", read_only="the wait is set up at start; " + START_ONLY,
+             choices=LOCKSTEP_CHOICES),
+        Spec("lockstep_timeout_s", 1.0, "a lockstep tick waiting longer than this warns and "
+             "is published again (the rig keeps waiting)", "s", 0.01, 3600.0),
+        Spec("start_paused", False, "start paused: nothing is published until ~/pause false, "
+             "so a controller can connect before the first tick",
+             read_only="it applies at start only"),
         Spec("qos_reliability", "reliable", "reliability of every rig topic",
              read_only="publishers and subscriptions are made with it; " + START_ONLY,
              choices=("reliable", "best_effort")),
@@ -173,6 +205,14 @@ def specs(preset: Preset) -> list[Spec]:
         Spec("record_split_size_bytes", 0, "start a new bag file past this size; 0: never",
              "bytes", 0, 2**62, "1 MiB at least: smaller than a chunk, files would split at "
              "every flush", off_or_at_least=MIB),
+        Spec("sensor_profile", "ideal", "what the ~/measured/ topics show: a sensor profile "
+             "name (ideal, surface_rig, mud_pulse, wired_pipe) or a profile YAML file "
+             "(msg_docs/sensors.md)",
+             read_only="the sensors' filters and delays start with the session (bag resim "
+                       "re-runs them); " + START_ONLY),
+        Spec("sensor_seed", 0, "seed of the sensors' noise: the same seed, the same noise",
+             "", 0, 2**31 - 1, "a non-negative 32-bit whole number",
+             read_only="the noise streams start from it; " + START_ONLY),
     ]
     return out + top_drive_specs(preset)
 
@@ -217,6 +257,9 @@ def cross_refusal(values: dict[str, object]) -> str | None:
     if values["max_speed"] and not values["publish_clock"]:
         return ("max_speed = true needs publish_clock = true: faster than real time, a "
                 "controller can only follow the simulation on /clock")
+    if values["lockstep"] and not values["publish_clock"]:
+        return ("lockstep = true needs publish_clock = true: the commands answer ticks by "
+                "their /clock time")
     if values["initial_weight_on_bit_n"] > values["submerged_weight_n"]:
         return (f"initial_weight_on_bit_n = {values['initial_weight_on_bit_n']:g} N exceeds "
                 f"submerged_weight_n = {values['submerged_weight_n']:g} N: the string cannot "

@@ -22,6 +22,7 @@ from .parameter_table import (
     BOOL,
     FLOAT,
     INT,
+    NAMES,
     PRESET_READ_ONLY,
     SPLITS,
     Spec,
@@ -30,7 +31,8 @@ from .parameter_table import (
 )
 
 _TYPES = {BOOL: ParameterType.PARAMETER_BOOL, INT: ParameterType.PARAMETER_INTEGER,
-          FLOAT: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING}
+          FLOAT: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING,
+          NAMES: ParameterType.PARAMETER_STRING_ARRAY}
 
 
 def descriptor(spec: Spec) -> ParameterDescriptor:
@@ -47,7 +49,7 @@ def descriptor(spec: Spec) -> ParameterDescriptor:
     notes = [n for n in (f"0 or at least {spec.off_or_at_least:g}" if spec.off_or_at_least
                          else "", spec.why, spec.read_only) if n]
     d.additional_constraints = "; ".join(notes) if not spec.choices else \
-        "one of: " + ", ".join(spec.choices)
+        ("some of: " if spec.kind is NAMES else "one of: ") + ", ".join(spec.choices)
     return d
 
 

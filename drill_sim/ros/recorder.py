@@ -21,6 +21,7 @@ from pathlib import Path
 from .. import __version__
 from ..bag.writer import BagError, BagWriter
 from ..core.rig import Rig
+from ..core.sensor_profile import SensorProfile
 from ..core.session import key_figures
 from ..wire import WireError, cdr, rig_topics
 from ..wire.rig_topics import RigTopic
@@ -32,10 +33,12 @@ class SessionRecorder:
     """
 
     def __init__(self, *, p: dict[str, object], rig: Rig, preset: str, node: str,
-                 resolve: Callable[[str], str], stamp_epoch_ns: int, logger) -> None:
+                 resolve: Callable[[str], str], stamp_epoch_ns: int, logger,
+                 sensors: SensorProfile | None = None) -> None:
         """p: the node's parameters at start; node: its fully qualified name; resolve: a
         table name to the full topic name (the node's remappings applied); stamp_epoch_ns:
-        what output stamps count from [ns] (0 with /clock)."""
+        what output stamps count from [ns] (0 with /clock); sensors: the sensor profile in
+        use, recorded whole (a profile file may change or vanish after the session)."""
         self.logger = logger
         self.error: str | None = None
         with_clock = bool(p["publish_clock"])
@@ -49,6 +52,8 @@ class SessionRecorder:
         for name, values in _context(p, rig, preset, node, stamp_epoch_ns,
                                      self.events_topic).items():
             meta.setdefault(name, {}).update(values)
+        if sensors is not None:
+            meta["sensors"] = {"name": sensors.name, "profile": json.dumps(sensors.as_dict())}
         # Every topic is recorded as offered with the session's qos_reliability (so /clock
         # too, though its publisher is always reliable): bags keep the form they always had;
         # /diagnostics, recorded since, with the QoS it is offered with.
@@ -143,5 +148,5 @@ def _context(p: dict[str, object], rig: Rig, preset: str, node: str, stamp_epoch
                    "stiffness_nm_per_rad": repr(sc.stiffness_nm_per_rad)},
         "figures": {k: repr(v) for k, v in key_figures(rig.params).items()},
         "session": {"preset": preset, "node": node, "stamp_epoch_ns": str(stamp_epoch_ns),
-                    "events_topic": events_topic},
+                    "events_topic": events_topic, "step_s": repr(rig.dt_s)},
     }

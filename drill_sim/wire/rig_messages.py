@@ -11,6 +11,7 @@ from . import cdr, rig_topics
 
 if TYPE_CHECKING:
     from ..core.rig import RigSample
+    from ..core.sensors import Measured
 
 
 class RigEncoders:
@@ -24,8 +25,15 @@ class RigEncoders:
             cdr.fields_encoder(cdr.layout(t.type_name, frame_id=t.frame_id, names=t.joints),
                                [(f.message, f.sample) for f in t.fields])
             for t in self.topics]
+        self._measured = [t.source == rig_topics.MEASURED for t in self.topics]
 
-    def sample(self, stamp_ns: int, s: RigSample) -> list[bytes]:
-        """One tick's messages stamped ``stamp_ns`` [ns], in the order of ``topics``."""
+    def sample(self, stamp_ns: int, s: RigSample, m: Measured | None = None) -> list[bytes]:
+        """One tick's messages stamped ``stamp_ns`` [ns], in the order of ``topics``: the
+        exact ones from ``s``, the ``~/measured/`` ones from ``m`` (None: the ideal sensors'
+        reading of ``s``, ``core.sensors.exact_measured``)."""
+        if m is None:
+            from ..core.sensors import exact_measured
+            m = exact_measured(s)
         sec, nsec = divmod(stamp_ns, 1_000_000_000)
-        return [encode(sec, nsec, s) for encode in self._encoders]
+        return [encode(sec, nsec, m if measured else s)
+                for encode, measured in zip(self._encoders, self._measured, strict=True)]

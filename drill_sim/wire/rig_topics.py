@@ -9,7 +9,10 @@ so adding an output is one entry here plus its line in msg_docs/node.md. Which f
 command carries it, and the limit that applies, are the session's rules: ``command`` names the
 rule in ``core.session.COMMANDS``.
 
-Outputs are published every tick in table order (``/clock`` first when published).
+Outputs are published every tick in table order (``/clock`` first when published). Most carry
+the model's exact state (for evaluation and plots); those under ``~/measured/`` carry what the
+rig's sensors show (``core.sensors``, the ``sensor_profile`` parameter), the signals a controller
+under test reads: their fields name ``Measured`` fields (``source`` MEASURED).
 """
 
 from __future__ import annotations
@@ -33,6 +36,9 @@ CLOCK = "clock"                # published every tick with publish_clock:=true
 EVENTS = "events"              # recorded only (resets, parameter changes), never published
 
 RIG_QOS = Qos()                # KEEP_LAST 10; reliability from the qos_reliability parameter
+
+# what fills an output's fields: the exact RigSample, or the sensors' Measured
+SAMPLE, MEASURED = "sample", "measured"
 
 
 @dataclass(frozen=True)
@@ -58,6 +64,7 @@ class RigTopic:
     frame_id: str = ""                 # header.frame_id of outputs
     joints: tuple[str, ...] = ()       # JointState names
     command: str = ""                  # commands: the rule in core.session.COMMANDS
+    source: str = SAMPLE               # outputs: SAMPLE (exact state) or MEASURED (sensors)
 
     def under(self, node: str) -> str:
         """The name for the rig node ``node`` (``/rig1/drill_sim``, or relative ``drill_sim``)."""
@@ -107,6 +114,26 @@ TOPICS: tuple[RigTopic, ...] = (
     RigTopic("~/top_drive/motor_wrench", "geometry_msgs/msg/WrenchStamped", OUTPUT,
              frame_id=FRAME_TOP_DRIVE,
              fields=(Field("wrench.torque.z", "motor_torque_nm", "N m"),)),
+    # what the rig's sensors show (sensor_profile), held between fresh samples
+    RigTopic("~/measured/top_drive/wrench", "geometry_msgs/msg/WrenchStamped", OUTPUT,
+             frame_id=FRAME_TOP_DRIVE, source=MEASURED,
+             fields=(Field("wrench.force.z", "hook_load_n", "N"),
+                     Field("wrench.torque.z", "surface_torque_nm", "N m"))),
+    RigTopic("~/measured/top_drive/twist", "geometry_msgs/msg/TwistStamped", OUTPUT,
+             frame_id=FRAME_TOP_DRIVE, source=MEASURED,
+             fields=(Field("twist.angular.z", "top_drive_speed_rad_s", "rad/s"),)),
+    RigTopic("~/measured/top_drive/motor_wrench", "geometry_msgs/msg/WrenchStamped", OUTPUT,
+             frame_id=FRAME_TOP_DRIVE, source=MEASURED,
+             fields=(Field("wrench.torque.z", "motor_torque_nm", "N m"),)),
+    RigTopic("~/measured/bit/wrench", "geometry_msgs/msg/WrenchStamped", OUTPUT,
+             frame_id=FRAME_BIT, source=MEASURED,
+             fields=(Field("wrench.force.z", "wob_n", "N"),
+                     Field("wrench.torque.z", "tob_nm", "N m"))),
+    RigTopic("~/measured/bit/twist", "geometry_msgs/msg/TwistStamped", OUTPUT,
+             frame_id=FRAME_BIT, source=MEASURED,
+             fields=(Field("twist.angular.z", "bit_speed_rad_s", "rad/s"),)),
+    RigTopic("~/measured/bit/stick_slip_severity", "std_msgs/msg/Float64", OUTPUT,
+             source=MEASURED, fields=(Field("data", "stick_slip_severity", ""),)),
     RigTopic("~/cmd/top_drive", "geometry_msgs/msg/TwistStamped", COMMAND, command="top_drive"),
     RigTopic("~/cmd/hook_load", "geometry_msgs/msg/WrenchStamped", COMMAND, command="hook_load"),
     RigTopic("~/cmd/top_drive_torque", "geometry_msgs/msg/WrenchStamped", COMMAND,
@@ -140,6 +167,7 @@ BIT_STICK_SLIP = topic("~/bit/stick_slip")
 DIAGNOSTICS_TOPIC = topic("/diagnostics")
 EVENTS_TOPIC = topic("~/events")
 OUTPUTS = of(OUTPUT)
+MEASURED_OUTPUTS = tuple(t for t in OUTPUTS if t.source == MEASURED)
 COMMANDS = of(COMMAND)
 SERVICES = of(SERVICE)
 COMMAND_BY_RULE = {t.command: t for t in COMMANDS}

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import random
 
 import pytest
 
@@ -18,6 +19,7 @@ from drill_sim.core.diagnostics import (
     rig_status,
 )
 from drill_sim.core.pacing import Pacer, TickStats
+from drill_sim.ros.parameter_table import specs
 
 
 class FakeClock:
@@ -88,7 +90,8 @@ def test_a_healthy_rig_is_ok_with_every_value(samples):
     assert (status.level, status.message) == (OK, "steady")
     assert status.values == {
         "tick_rate_hz": "1000.0", "tick_period_p99_ms": "1.050", "tick_period_max_ms": "1.200",
-        "overruns": "0", "real_time_factor": "1.000", "regime": "steady", "ssi": "0.000",
+        "overruns": "0", "longest_stall_ms": "0.000", "real_time_factor": "1.000",
+        "regime": "steady", "ssi": "0.000",
         "stick_fraction": "0.000", "off_bottom_fraction": "0.000", "command_age_s": "0.200",
         "commands_received": "120", "commands_superseded": "3", "commands_lost": "0",
         "sim_time_s": "12.500", "paused": "false"}
@@ -129,25 +132,78 @@ def test_slow_ticks_warn_only_after_overruns_and_never_at_max_speed(samples):
     assert rig_status(s, QUIET, late, **RUNNING).values["tick_period_p99_ms"] == "nan"
 
 
-def test_real_time_pacing_follows_the_clock_and_drops_a_backlog():
+def _dues(pacer: Pacer, clock: FakeClock, gaps_s) -> list[int]:
+    """The ticks due at timer ticks ``gaps_s`` [s] apart."""
+    out = []
+    for gap in gaps_s:
+        clock.now += gap
+        out.append(pacer.due())
+    return out
+
+
+def test_real_time_pacing_advances_whole_ticks_despite_jitter():
+    """At factor 1 every timer tick advances exactly one tick although the timer jitters by
+    up to +-0.24 periods; over a run the ticks advanced equal the wall time x factor x rate."""
+    rng = random.Random(3)
+    clock = FakeClock()
+    pacer = Pacer(1000.0, 1.0, False, window_s=1.0, rig_time_s=0.0, clock=clock)
+    pacer.anchor()
+    times = [k * 1e-3 + rng.uniform(-2.4e-4, 2.4e-4) for k in range(1, 2001)]
+    gaps = [b - a for a, b in zip([0.0, *times], times, strict=False)]
+    assert _dues(pacer, clock, gaps) == [1] * 2000
+    for factor, per_tick in ((2.0, [2] * 6), (0.5, [1, 0, 1, 0, 1, 0]), (3.0, [3] * 6)):
+        pacer.configure(1000.0, factor, False)
+        assert _dues(pacer, clock, [1e-3] * 6) == per_tick, factor
+
+
+def test_a_stalled_tick_advances_the_ticks_it_missed_and_is_counted():
+    clock = FakeClock()
+    pacer = Pacer(1000.0, 1.0, False, window_s=1.0, rig_time_s=0.0, clock=clock)
+    dues = []
+    for gap in [1e-3] * 5 + [4.6e-3] + [1e-3] * 5:      # the 6th tick came 3.6 ms late
+        clock.now += gap
+        pacer.tick_started()
+        dues.append(pacer.due())
+        pacer.advanced(dues[-1])
+    assert dues == [1] * 5 + [5] + [1] * 5                # 4 missed ticks caught up, not more
+    stats = pacer.window(0.015)
+    assert (stats.overruns, stats.stalls) == (1, 1)
+    assert stats.longest_stall_s == pytest.approx(4.6e-3)
+    assert pacer.window(0.015).stalls == 0                # counted in its window only
+
+
+def test_real_time_pacing_drops_a_long_backlog():
     clock = FakeClock()
     pacer = Pacer(1000.0, 2.0, False, window_s=1.0, rig_time_s=0.0, clock=clock)
-    clock.now += 0.010
-    assert pacer.target(0.0) == pytest.approx(0.020)          # twice real time
-    pacer.advanced(0.020)
-    clock.now += 1.0                                          # a long stall: 2 s behind
-    target = pacer.target(0.020)
-    assert target == pytest.approx(0.020 + 0.2 + 0.001)       # at most 0.1 s x factor per tick
-    pacer.advanced(target)                                    # still behind: re-anchored here
-    clock.now += 0.001
-    assert pacer.target(target) == pytest.approx(target + 0.002)
-    assert pacer.tick_s == pytest.approx(0.002)
+    assert _dues(pacer, clock, [1e-3, 1e-3]) == [2, 2]    # twice real time
+    clock.now += 1.0                                       # a long stall: 2 s behind
+    assert pacer.due() == 201                              # at most 0.1 s x factor + a tick
+    assert _dues(pacer, clock, [1e-3, 1e-3]) == [2, 2]    # then on from there
+    assert pacer.tick_s == pytest.approx(0.001)           # a tick is 1/rate_hz in every mode
 
 
 def test_max_speed_pacing_advances_one_tick_per_call():
     pacer = Pacer(100.0, 3.0, True, window_s=1.0, rig_time_s=5.0, clock=FakeClock())
-    assert pacer.target(5.0) == pytest.approx(5.01)
+    assert [pacer.due() for _ in range(3)] == [1, 1, 1]
     assert pacer.tick_s == pytest.approx(0.01)        # what ~/step advances: one tick
+
+
+def test_the_step_divides_the_tick():
+    """A tick is a whole number of steps, the largest step not above dt_s (so the model's
+    stability limit holds): 1 ms at 105 us is ten steps of 100 us, not nine (0.947 ms)."""
+    for rate_hz, dt_s, steps in ((1000.0, 1.05e-4, 10), (100.0, 1.05e-4, 96),
+                                 (5000.0, 1.05e-4, 2), (1000.0, 1e-4, 10), (1000.0, 5e-3, 1)):
+        p = {"rate_hz": rate_hz, "dt_s": dt_s}
+        step = session.step_s(p)
+        assert step <= dt_s and steps * step == pytest.approx(1.0 / rate_hz, rel=1e-15)
+        assert round(1.0 / (rate_hz * step)) == steps
+    rig = session.make_rig({**{s.name: s.default for s in specs(load_preset("base"))},
+                            "rate_hz": 1000.0})
+    for k in range(1, 4):
+        rig.advance_steps(10)
+        assert round(rig.time_s * 1e9) == k * 1_000_000   # exactly 1 ms a tick, in ns
+    assert session.tick_refusal(500.0, 1e-4) is None and session.tick_refusal(2000.0, 1e-4) is None
+    assert "whole number of the session's step" in session.tick_refusal(3000.0, 1e-4)
 
 
 def test_tick_statistics_over_a_window():
@@ -156,7 +212,7 @@ def test_tick_statistics_over_a_window():
     for k in range(100):
         clock.now += 0.002 if k == 50 else 0.001             # one overrun (> 1.5 periods)
         pacer.tick_started()
-        pacer.advanced(0.001 * k)
+        pacer.advanced(1)
     stats = pacer.window(0.1)
     assert (stats.ticks, stats.overruns) == (100, 1)
     assert stats.wall_s == pytest.approx(0.101)
@@ -179,7 +235,7 @@ def test_max_speed_ticks_never_overrun():
         clock.now += 0.05
         pacer.tick_started()
     assert pacer.overruns == 0
-    pacer.configure(1000.0, 1.0, False, 0.0)
+    pacer.configure(1000.0, 1.0, False)
     clock.now += 0.05
     pacer.tick_started()
     assert pacer.overruns == 1

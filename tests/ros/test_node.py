@@ -141,7 +141,7 @@ def test_pause_step_and_reset(client):
     first = client.wrench[0][0]
     client.call(Trigger, "step", Trigger.Request())
     wait_for(lambda: len(client.wrench) == 2, client.node, 5.0, "a second stepped sample")
-    assert client.wrench[1][0] - first == pytest.approx(4e-3, abs=2e-4)  # one tick x RTF 4
+    assert client.wrench[1][0] - first == pytest.approx(1e-3, abs=2e-4)  # a tick: 1/rate_hz
     reset = client.call(Trigger, "reset", Trigger.Request())
     assert reset.success and "steady" in reset.message
     assert client.call(SetBool, "pause", SetBool.Request(data=False)).success

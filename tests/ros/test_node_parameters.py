@@ -30,6 +30,10 @@ ROOT = Path(__file__).resolve().parents[2]
     ("record_split_size_bytes:=1", "1 MiB at least"),
     ("record_split_duration_s:=0.001", "a file a second at least"),
     ("initial_weight_on_bit_n:=400000.0", "exceeds submerged_weight_n"),
+    ("lockstep:=true", "lockstep = true needs publish_clock = true"),
+    ("lockstep_topics:=[cmd/top_drive, cmd/nope]",
+     "expected a list of one or more of cmd/top_drive"),
+    ("lockstep_timeout_s:=nan", "lockstep_timeout_s = nan: expected a finite number"),
 ])
 def test_a_bad_startup_parameter_is_one_line_and_status_2(ros, param, fragment):
     proc = NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/badparam", "-p", param)
@@ -90,11 +94,13 @@ def test_run_time_refusals_say_why(ros, tmp_path):
             "submerged_weight_n": (1e9, "3-4 MN"),
             "bha_mass_kg": (0.0, "from 300 to 200000 kg"),
             "initial_weight_on_bit_n": (5e5, "exceeds submerged_weight_n"),
+            "rate_hz": (300.0, "whole number of the session's step"),
+            "lockstep": (True, "tick loop"),
         }
         for name, (value, why) in refused.items():
             result = _set(ros, rig, name, value)
             assert not result.successful and why in result.reason, (name, result.reason)
-        for name, value in (("record_split_size_bytes", 1 << 20),
+        for name, value in (("record_split_size_bytes", 1 << 20), ("rate_hz", 500.0),
                             ("record_split_duration_s", 2), ("submerged_weight_n", 4e5)):
             result = _set(ros, rig, name, value)
             assert result.successful, (name, result.reason)

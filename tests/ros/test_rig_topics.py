@@ -11,6 +11,7 @@ import pytest
 
 from drill_sim.core import RPM, Rig, RigSample, load_preset, session
 from drill_sim.core.rig import REGIME_NAMES
+from drill_sim.core.sensors import Measured, exact_measured
 from drill_sim.wire import rig_topics
 from drill_sim.wire.cdr import VECTOR_FIELDS
 from drill_sim.wire.qos import BEST_EFFORT
@@ -35,8 +36,10 @@ def test_table_entries_are_complete_and_consistent():
         assert (t.qos is None) == (t.direction == SERVICE), t.name
         if t.direction == OUTPUT:
             assert t.fields, f"{t.name}: an output without fields"
+        source = Measured if t.source == rig_topics.MEASURED else RigSample
+        assert (t.source == rig_topics.MEASURED) == t.name.startswith("~/measured/"), t.name
         for f in t.fields:
-            assert f.sample in RigSample._fields, f"{t.name}: {f.sample} is not a RigSample field"
+            assert f.sample in source._fields, f"{t.name}: {f.sample} is not a {source} field"
         if t.direction == COMMAND and t.command != session.JOINT_COMMANDS:
             rule = session.COMMANDS[t.command]   # the session's rule reads the field it names
             assert VECTOR_FIELDS[t.type_name][rule.index] == rule.field, t.name
@@ -94,8 +97,9 @@ def test_encoded_outputs_carry_the_sample_fields_the_table_names(with_clock):
                     assert msg.header.frame_id == t.frame_id, t.name
             if t.joints:
                 assert tuple(msg.name) == t.joints
+            source = exact_measured(s) if t.source == rig_topics.MEASURED else s
             for f in t.fields:
-                assert _field(msg, f.message) == getattr(s, f.sample), (t.name, f)
+                assert _field(msg, f.message) == getattr(source, f.sample), (t.name, f)
 
 
 def test_node_md_documents_every_entry_with_its_type():
