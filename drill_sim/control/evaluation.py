@@ -84,6 +84,7 @@ class Scenario:
     duration_s: float = 60.0
     window_start_s: float = 30.0
     switch_on_s: float = 0.0
+    start_rpm: float | None = None     # the steady start's speed; None: the first set-point
 
     def __post_init__(self) -> None:
         check_number("duration_s", self.duration_s, high=1e5)
@@ -203,7 +204,9 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
     if np.any(hook < 0.0):
         raise ParameterError(f"wob_kn up to {wob_kn.max():g} kN is out of range: expected at "
                              f"most W_s = {preset.rig.submerged_weight_n / 1e3:g} kN")
-    rig.start_steady(float(speed_set[0]), float(hook[0]), perturbation=settings.perturbation)
+    start = speed_set[0] if scenario.start_rpm is None else check_number(
+        "start_rpm", scenario.start_rpm) * RPM
+    rig.start_steady(float(start), float(hook[0]), perturbation=settings.perturbation)
     speed_law = law.output_kind == "speed"
     switch_k = 0 if speed_law else math.ceil(scenario.switch_on_s / h - 1e-9)
     active = law if switch_k == 0 else build_law(preset, replace(settings, law="stiff_pi",

@@ -243,6 +243,10 @@ class ControllerNode(Node):
             self.get_logger().warn(f"sample at {stamp * 1e-9:.3f} s skipped: non-finite input")
             return
         m = SurfaceMeasurement(stamp * 1e-9, speed, motor, surface)
+        if self._last is not None and m.time_s == self._last.time_s:
+            if self.core.last_output is not None and self.core.enabled:   # a tick published
+                self._publish(msg.header.stamp, self.core.last_output)    # again: same answer
+            return
         # The law runs on sim time: when the rig skipped ticks (real time on a busy machine)
         # the law is stepped once per period h of the gap on measurements interpolated
         # linearly from the previous sample, so its filters, derivative and integral keep
@@ -255,10 +259,12 @@ class ControllerNode(Node):
             self.core.step(SurfaceMeasurement(*(a + f * (b - a) for a, b in zip(last, m,
                                                                                 strict=True))))
         out = self.core.step(m)
-        if out is None:
-            return
-        self.msg.header.stamp = msg.header.stamp
-        self.msg.wrench.torque.z = out
+        if out is not None:
+            self._publish(msg.header.stamp, out)
+
+    def _publish(self, stamp, torque_nm: float) -> None:
+        self.msg.header.stamp = stamp
+        self.msg.wrench.torque.z = torque_nm
         self.pub.publish(self.msg)
 
     def _diagnose(self) -> None:
