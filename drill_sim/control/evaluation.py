@@ -1,10 +1,11 @@
 """The offline closed loop: a Rig stepped one controller sample period h at a time, a law on its
 surface measurements, and the metrics that score it (msg_docs/control.md, "Evaluation").
 
-Sample instants are those of the rig node at ``rate_hz = 1/h``: the rig keeps its own step dt
-and advances to the last step at or before k·h (``Rig.advance_to``, as the node's tick does);
-the law reads the sample there (through ``measure``, the sensor model; ideal by default) and
-its output is held until the next sample (zero-order hold). So the same law at the same h gives
+Sample instants are those of the rig node at ``rate_hz = 1/h``: the rig steps with the
+node's step, the largest divisor of h not above the default step (``core.session``: 100 µs at
+1 kHz on base), so the samples fall exactly on k·h as the node's ticks do; the law reads
+the sample there (through ``measure``, the sensor model; ideal by default) and its output is
+held until the next sample (zero-order hold). So the same law at the same h gives
 the same numbers here and through the nodes in lockstep.
 
 Torque laws drive a top drive in ``torque`` mode (inertia, limits, rate and lag as given);
@@ -24,6 +25,8 @@ import numpy as np
 
 from ..core import RPM, Preset, Rig, RigSample, load_preset
 from ..core.parameters import ParameterError, check_number
+from ..core.session import steps_per_tick
+from ..core.simulator import DEFAULT_DT
 from ..core.top_drive import TopDriveParameters
 from . import make_law
 from .laws import Law, SurfaceMeasurement
@@ -195,7 +198,8 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
     law = build_law(preset, settings, drive)
     measure = settings.measure or sensor_measurement(settings.sensor_profile, h,
                                                      settings.sensor_seed)
-    rig = Rig(preset.rig, top_drive=drive, string_model=settings.string_model,
+    steps = steps_per_tick(h, DEFAULT_DT * preset.rig.scales.time_s)
+    rig = Rig(preset.rig, h / steps, top_drive=drive, string_model=settings.string_model,
               geometry=preset.string)
     n = math.floor(scenario.duration_s / h + 1e-9)
     times = np.arange(n + 1) * h
@@ -228,7 +232,7 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
         else:
             rig.command(float(speed_set[k - 1]), float(hook[k - 1]))
             rig.command_motor_torque(output)
-        rig.advance_to(times[k])
+        rig.advance_steps(steps)
         if k == window_k:
             rig.reset_metrics_window()
         sample = rig.sample()

@@ -35,6 +35,7 @@ from rclpy.parameter import Parameter
 from ..control import LAWS
 from ..control.laws import SurfaceMeasurement
 from ..control.supervisor import Supervisor
+from ..control.tuning import pipe_impedance
 from ..core.parameters import ParameterError
 from ..wire import rig_topics
 from ..wire.qos import RELIABLE
@@ -131,7 +132,8 @@ class ControllerNode(Node):
             ("law", "z_torque", f"one of {', '.join(CONTROL_LAWS)}"),
             ("enabled", True, "false: publish nothing; true again: take over bumplessly"),
             ("sample_period_s", 1e-3, "the law's h [s]: the rig's 1/rate_hz"),
-            ("impedance_nm_s_rad", 302.4, "the pipe's Z = J_p sqrt(G rho) [N m s/rad] (base)"),
+            ("impedance_nm_s_rad", pipe_impedance("base"),
+             "the pipe's Z = J_p sqrt(G rho) [N m s/rad]; default the base pipe's"),
             ("top_drive_inertia_kg_m2", 2900.0, "J_TD [kg m^2], as the rig's"),
             ("inputs", "measured", "measured (~/measured/...) or exact (~/top_drive/...)"),
             ("setpoint_topic", "", "TwistStamped speed set-point [rad/s]; '': the rig's "

@@ -39,7 +39,7 @@ def test_kinematic_loop_is_the_rig_left_alone(preset):
     metrics equal those of a Rig advanced straight through the same window."""
     scenario = Scenario.steady(60.0, 100.0, duration_s=12.0, window_start_s=6.0)
     looped = run_loop(preset, scenario, LoopSettings(law="kinematic"))
-    rig = Rig(preset.rig)
+    rig = Rig(preset.rig, 1e-4)           # the node's step at 1 kHz: 1 ms / 10
     rig.start_steady(60 * RPM, preset.rig.submerged_weight_n - 100e3, perturbation=1e-3)
     rig.advance_to(6.0)
     rig.reset_metrics_window()
