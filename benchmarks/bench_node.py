@@ -14,10 +14,11 @@ in torque mode and the benchmark closing the loop like a controller: for every
 the top-drive speed, 60 rpm), so the node takes a command every tick.
 
 With --sensor-profile NAME every node runs that sensor profile (msg_docs/sensors.md);
---rate-only prints only the 1000 Hz rate and CPU.
+--string-model lumped|distributed sets every node's string_model; --rate-only prints only
+the 1000 Hz rate and CPU.
 
 Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30] [--top-drive-mode torque]
-         [--sensor-profile NAME] [--rate-only]
+         [--sensor-profile NAME] [--string-model distributed] [--rate-only]
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 BIN = Path(sys.executable).parent
+NODE_ARGS: list[str] = []       # parameters every node started here gets (sensors, string)
 
 
 def cpu_seconds(pid: int) -> float:
@@ -46,11 +48,8 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-SENSORS: list[str] = []          # -p sensor_profile:=... for every node started
-
-
 def start(*args: str) -> subprocess.Popen:
-    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *SENSORS, *args],
+    return subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", *NODE_ARGS, *args],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
@@ -121,7 +120,7 @@ def rate_and_cpu(node, seconds: float, record: str = "", mode: str = "kinematic"
     loop = (f", top drive in torque mode, {controller.sent / seconds:.0f} torque commands/s "
             "back" if controller is not None else "")
     print(f"1000 Hz, all outputs{', recording' if record else ''}, one external subscriber"
-          f"{loop}, {seconds:g} s: achieved "
+          f"{loop}, {' '.join(NODE_ARGS[1::2])}, {seconds:g} s: achieved "
           f"{rate:.1f} Hz ({100 * rate / 1000:.2f} %), received period p50 "
           f"{np.percentile(periods, 50):.3f} ms, p99 {np.percentile(periods, 99):.3f} ms; "
           f"tick period p99 in the node per 1 s window: median {np.median(p99s):.3f} ms, "
@@ -188,10 +187,12 @@ def main() -> None:
     parser.add_argument("--top-drive-mode", choices=("kinematic", "torque"),
                         default="kinematic")
     parser.add_argument("--sensor-profile", default="ideal")
+    parser.add_argument("--string-model", choices=("lumped", "distributed"), default=None)
     parser.add_argument("--rate-only", action="store_true")
     args = parser.parse_args()
-    SENSORS[:] = ["-p", f"sensor_profile:={args.sensor_profile}"]
-    print(f"sensor profile {args.sensor_profile}")
+    NODE_ARGS.extend(["-p", f"sensor_profile:={args.sensor_profile}"])
+    if args.string_model:
+        NODE_ARGS.extend(["-p", f"string_model:={args.string_model}"])
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     rclpy.init()
@@ -212,6 +213,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         recording = rate_and_cpu(node, args.seconds, record=f"{tmp}/bag")
     print(f"CPU added by in-node recording: {100 * (recording - plain):.1f} % of one core")
+    if args.rate_only:
+        node.destroy_node()
+        rclpy.shutdown()
+        return
     latency(node)
     with tempfile.TemporaryDirectory() as tmp:
         latency(node, record=f"{tmp}/bag")

@@ -5,8 +5,9 @@ millisecond) recording everything, plus a 50 Hz driver, and samples the node's r
 size every ``--every`` seconds for ``--minutes``. Prints each sample and the growth rate over
 the second half (after the allocator and the caches have settled), in MB per minute.
 
-What remains of the growth while recording is the summary an MCAP file must end with (~200
-bytes per chunk); ``--split-s`` starts a new file that often, which hands it over.
+The summary an MCAP file must end with (~200 bytes per chunk) waits in a temporary file until
+the file is finished, so recording into one file keeps the node's memory flat; ``--split-s``
+starts a new file that often.
 
 Run: .venv/bin/python benchmarks/bench_soak.py [--minutes 5] [--every 10] [--no-record]
          [--real-time] [--split-s S]

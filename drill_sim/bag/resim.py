@@ -110,7 +110,8 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
                          meta["session"].get("preset", "?"))
     try:
         # the step the node used; bags from before it was recorded ran at dt_s itself
-        rig = session.make_rig(p, float(meta["session"].get("step_s", p["dt_s"])))
+        geometry = session.geometry_from_record(meta["string"]) if "string" in meta else None
+        rig = session.make_rig(p, float(meta["session"].get("step_s", p["dt_s"])), geometry)
         session.start(rig, p)
         recorded = meta.get("sensors", {})
         sensors = session_sensors(p, rig.dt_s, profile_from_dict(

@@ -183,7 +183,8 @@ def run_settings(case: Case, timing: Timing, start: str | None, gap: float,
     m (SI) or L*; ``drive`` the top drive (None: kinematic). A steady start where there is none
     (or that the drive's torque limits cannot hold), or a step that cannot resolve the top
     drive, is a UsageError (``where`` names the point, for a map). ``string_model`` None is the
-    preset's (lumped in groups mode); the distributed string runs with the kinematic drive."""
+    preset's (lumped in groups mode); with the distributed string a top drive in the loop is
+    the string's top boundary."""
     speed = "--rpm" if case.si else "--omega0"
     start = start or default_start(case.groups, case.w0, case.omega0)
     if start == "steady" and case.omega0 == 0:
@@ -196,10 +197,6 @@ def run_settings(case: Case, timing: Timing, start: str | None, gap: float,
             raise UsageError(f"--start steady{where}: {exc}") from None
     t_star = timing.t_star_s
     waves = string_waves(case, string_model, timing.dt / t_star)
-    if waves is not None and drive is not None and drive.top_drive.top_drive_mode != "kinematic":
-        raise UsageError(f"--string-model distributed with --top-drive-mode "
-                         f"{drive.top_drive.top_drive_mode}{where}: the distributed string runs "
-                         "with the kinematic top drive; expected one of the two")
     groups, torque = None, None
     if drive is not None and drive.top_drive.top_drive_mode != "kinematic":
         rig = case.preset.rig
@@ -211,6 +208,8 @@ def run_settings(case: Case, timing: Timing, start: str | None, gap: float,
                              "heavier --top-drive-inertia")
         if start == "steady":
             t0 = steady_state(case.groups, case.w0, case.omega0).t0
+            if waves is not None:           # the torque at the top: the dashpots' share too
+                t0 += float(waves.torsion.dashpot.sum()) * case.omega0
             if not groups.t_min <= t0 <= groups.t_max:
                 c = rig.torsional_stiffness_nm_per_rad
                 raise UsageError(f"--start steady{where}: steady drilling needs a motor torque of "

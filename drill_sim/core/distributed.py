@@ -5,10 +5,14 @@ collars stay the rigid BHA (I, M) at its end, so the bit equations are the lumpe
 C (phi_td - phi) replaced by the pipe's bottom torque and W0 by the pipe's bottom force
 (msg_docs/model.md, "The distributed string"). A lossless uniform section is an exact delay of
 its two Riemann invariants a = T + Z omega (down) and b = T - Z omega (up); with the step h, a
-section of travel time D is a ring buffer of N = round(D/h) step means. Viscous damping per unit
-length is lumped into ``stations`` dashpots per section, each at the bottom of a segment of
-equal length. This module turns SI geometry into that dimensionless description and gives the
-sections' transfer matrices (frequency domain) for the theory.
+segment of travel time D = (N + f) h (N whole, 0 <= f < 1) is a ring buffer of N + 1 step means,
+and what arrives in a step is the exact mean of the departures over the step D earlier, the two
+step means it straddles weighted 1 - f and f. Viscous damping per unit
+length is lumped into ``stations`` dashpots per section, at the centres of equal parts of it
+(the midpoint rule: the damped modes' decay rates within ~0.5 % of the continuously damped
+pipe's at 8 stations, where dashpots at the parts' ends were 16 % off for the first mode).
+This module turns SI geometry into that dimensionless description and gives the sections'
+transfer matrices (frequency domain) for the theory.
 """
 
 from __future__ import annotations
@@ -72,19 +76,31 @@ def pipe_sections(geometry: StringGeometry, torsional_damping: float = 0.0,
 class WaveLine:
     """One wave family (torsional or axial) of the string, dimensionless, top segment first.
 
-    z: impedance of each segment; delay: its travel time [t*]; steps: its ring-buffer length
-    (round(delay/h)); dashpot: at the segment's bottom (the last one acts on the BHA)."""
+    z: impedance of each segment; delay: its travel time [t*]; steps, frac: the travel time in
+    steps, whole and fraction (steps + frac = delay/h; a segment shorter than a step is
+    simulated as one step, steps 1 and frac 0); dashpot: at the segment's bottom (the last one
+    acts on the BHA)."""
 
     z: np.ndarray
     delay: np.ndarray
     steps: np.ndarray
     dashpot: np.ndarray
     h: float
+    frac: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.frac is None:
+            object.__setattr__(self, "frac", np.zeros(np.size(self.steps)))
+
+    @property
+    def simulated_delay(self) -> np.ndarray:
+        """The travel times the simulation uses, (steps + frac) h [t*]."""
+        return (self.steps + self.frac) * self.h
 
     @property
     def delay_error(self) -> float:
-        """Largest relative error of a segment's simulated travel time steps*h vs delay."""
-        return float(np.max(np.abs(self.steps * self.h - self.delay) / self.delay))
+        """Largest relative error of a segment's simulated travel time vs delay."""
+        return float(np.max(np.abs(self.simulated_delay - self.delay) / self.delay))
 
     def transfer(self, s: complex | np.ndarray) -> tuple:
         """Top-to-bottom transfer matrix (m11, m12, m21, m22) of (angle, torque) at Laplace
@@ -137,25 +153,33 @@ def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float,
             (shear_modulus_pa, "polar_moment_m4", "torsional_damping", c_scale * ts),
             (young_modulus_pa, "area_m2", "axial_damping", sc.force_n * ts / sc.length_m)):
         speed = math.sqrt(modulus / rho)
-        z, delay, steps, dash = [], [], [], []
+        z, delay, steps, frac, dash = [], [], [], [], []
         for sec in sections:
-            k = stations if getattr(sec, damp) > 0.0 else 1
-            total = max(k, round(sec.length_m / speed / ts / h))
-            for j in range(k):
-                n_j = total * (j + 1) // k - total * j // k
+            k = stations if getattr(sec, damp) > 0.0 else 0
+            # segment ends: 0, (j - 1/2)/k (the dashpots, at the centres of k equal parts), 1
+            ends = [0.0, *((j + 0.5) / k for j in range(k)), 1.0]
+            for j in range(k + 1):
+                d = (ends[j + 1] - ends[j]) * sec.length_m / speed / ts
+                whole = max(1, math.floor(d / h))
                 z.append(getattr(sec, prop) * math.sqrt(modulus * rho) / imp_scale)
-                delay.append(sec.length_m / k / speed / ts)
-                steps.append(n_j)
-                dash.append(getattr(sec, damp) * sec.length_m / k / imp_scale)
+                delay.append(d)
+                steps.append(whole)
+                frac.append(min(max(d / h - whole, 0.0), 1.0 - 1e-12))
+                dash.append(getattr(sec, damp) * sec.length_m / k / imp_scale if j < k else 0.0)
         lines.append(WaveLine(np.array(z), np.array(delay), np.array(steps, dtype=np.int64),
-                              np.array(dash), h))
+                              np.array(dash), h, np.array(frac)))
     return StringWaves(lines[0], lines[1], h)
 
 
 def geometry_waves(params: RigParameters, geometry: StringGeometry, h: float,
-                   young_modulus_pa: float = 200e9, torsional_damping: float = 0.0,
-                   axial_damping: float = 0.0) -> StringWaves:
-    """The wave lines of a preset's pipe (one section) at step ``h`` [t*]."""
+                   young_modulus_pa: float = 200e9, torsional_damping: float | None = None,
+                   axial_damping: float | None = None) -> StringWaves:
+    """The wave lines of a preset's pipe (one section) at step ``h`` [t*]; damping per unit
+    length (torsional [N m s/rad per m], axial [N s/m per m]) None: the geometry's."""
+    if torsional_damping is None:
+        torsional_damping = geometry.torsional_damping_nm_s_per_rad_m
+    if axial_damping is None:
+        axial_damping = geometry.axial_damping_n_s_per_m2
     return string_waves(params, pipe_sections(geometry, torsional_damping, axial_damping), h,
                         shear_modulus_pa=geometry.shear_modulus_pa,
                         young_modulus_pa=young_modulus_pa,

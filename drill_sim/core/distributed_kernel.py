@@ -1,7 +1,10 @@
 """The numba stepper of the distributed string: the lumped kernel's bit, a string of delay lines.
 
-Each step h: (1) read the Riemann invariants arriving at every junction this step (ring-buffer
-slot ``steps mod N`` of each segment: what left its other end N steps ago); (2) step the BHA
+Each step h: (1) read the Riemann invariants arriving at every junction this step: a segment
+of travel time (N + f) h keeps the last N + 1 departures (slot ``steps mod (N + 1)``), and what
+arrives is the mean over the step of what left its other end (N + f) h earlier, the departures
+of N and N + 1 steps ago weighted 1 - f and f (exact for step means; the weighting dissipates
+h f (1 - f) (x_N - x_N+1)^2 / (4 z), booked as the transport loss); (2) step the BHA
 and the bit exactly as the lumped kernel does (the same inline laws ``_bit_rock_law``,
 ``_surface_at``, ``_first_swept_node``, ``_blade_height``, ``_accumulate``, switches located
 and the step split there), with the string torque C (phi_td - phi) replaced by the pipe's
@@ -9,6 +12,16 @@ bottom torque a - (z + c) omega and W0 by its bottom force a_a - (z_a + c_a) v (
 predicted at each part's midpoint from the last step's acceleration); (3) send the reflected
 invariants b = a - 2 z omega_mean up from the BHA, solve each junction (impedance change and
 dashpot) and the top boundary, and write the departing invariants into the slots just read.
+
+The top boundary: in kinematic mode the speed omega0 is imposed (departing a = b + 2 z omega0).
+With a top drive in the loop (speed or torque mode) the top of the string is the drive's
+inertia j: j dOmega_TD/dt = T_m - T_top with T_top = b + z Omega_TD, the characteristic
+relation of the arriving invariant b (held over the step). The lumped kernel's ``_drive_step``
+(PI, limits, rate limit, lag) solves it by the trapezoidal rule with the string torque taken at
+the mean speed, b + z (Omega_TD + Omega_TD+)/2, which is the lumped call with h/j replaced by
+(h/j)/(1 + h z/(2 j)) and the string torque by b + z Omega_TD. The departing invariant is
+a = b + 2 z Omega_mean, so the drive's kinetic energy, the motor's work and the line's energy
+balance exactly step by step (msg_docs/model.md, "The distributed string").
 Memory is fixed: the ring buffers are sized at construction; nothing is allocated per step.
 """
 
@@ -27,7 +40,10 @@ from .kernel import (
     _accumulate,
     _bit_rock_law,
     _blade_height,
+    _drive_step,
     _first_swept_node,
+    _load_drive,
+    _store_drive,
     _surface_at,
 )
 
@@ -35,22 +51,31 @@ from .kernel import (
 # surface torque at the top of the string)
 X_T_BOTTOM, X_F_BOTTOM, X_V_TOP, X_F_TOP, X_DOM, X_DV, X_A_PREV = range(kn.NX, kn.NX + 7)
 NXD = kn.NX + 7
-# extra accumulators: dashpot dissipation, torsional [C] and axial [F* L*]
-A_DAMPED_ROT, A_DAMPED_AX = kn.NA, kn.NA + 1
-NAD = kn.NA + 2
+# extra accumulators: dashpot dissipation, torsional [C] and axial [F* L*]; the energy the
+# transport's weighting of two departures dissipates, likewise
+A_DAMPED_ROT, A_DAMPED_AX, A_LOSS_ROT, A_LOSS_AX = range(kn.NA, kn.NA + 4)
+NAD = kn.NA + 4
 # extra output columns: pipe torque and force on the BHA, top axial speed and force
 O_T_BOTTOM, O_F_BOTTOM, O_V_TOP, O_F_TOP = range(kn.NO, kn.NO + 4)
 NOD = kn.NO + 4
 
 
 @njit(cache=True, inline="always")
-def _arrivals(buf, off, n_seg, slot_of, k, a_in, b_in):
-    """Invariants arriving this step: a at each segment's bottom, b at its top."""
+def _arrivals(buf, off, n_seg, frac, z, slot_of, k, a_in, b_in):
+    """Invariants arriving this step: a at each segment's bottom, b at its top (``n_seg``: the
+    slots per direction, N + 1); returns the transport loss's rate (times h: its energy)."""
+    loss = 0.0
     for j in range(n_seg.size):
-        slot = k % n_seg[j]
-        slot_of[j] = slot
-        a_in[j] = buf[off[j] + slot]
-        b_in[j] = buf[off[j] + n_seg[j] + slot]
+        m, f = n_seg[j], frac[j]
+        old = k % m
+        new = old + 1 if old + 1 < m else 0
+        slot_of[j] = old
+        a0, a1 = buf[off[j] + old], buf[off[j] + new]
+        b0, b1 = buf[off[j] + m + old], buf[off[j] + m + new]
+        a_in[j] = a1 + f * (a0 - a1)
+        b_in[j] = b1 + f * (b0 - b1)
+        loss += f * (1.0 - f) * ((a1 - a0) ** 2 + (b1 - b0) ** 2) / (4.0 * z[j])
+    return loss
 
 
 @njit(cache=True, inline="always")
@@ -71,8 +96,8 @@ def _junctions(buf, off, n_seg, z, c, slot_of, a_in, b_in, top_speed, bottom_spe
 
 
 @njit(cache=True)
-def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abuf, scratch,
-            slots, n_steps, out, out_every, out_row):
+def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, toff, tbuf, az, an, af, ac, aoff, abuf,
+            scratch, slots, n_steps, out, out_every, out_row):
     """Advance ``n_steps`` steps; rows every ``out_every`` steps (the lumped kernel's columns,
     then O_T_BOTTOM.. if ``out`` has them); return the next free row. A step that would turn
     the bit more than a sector is refused (K_REFUSED = 1), as in the lumped kernel."""
@@ -94,16 +119,39 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
     dom, dv, a_prev = x[X_DOM], x[X_DV], x[X_A_PREV]
     t_bot, f_bot, v_top, f_top = x[X_T_BOTTOM], x[X_F_BOTTOM], x[X_V_TOP], x[X_F_TOP]
     a_w, a_tob = acc[kn.A_W], acc[kn.A_T]
-    work_td, work_w, work_h = acc[kn.A_WORK_TOP_DRIVE], acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST]
+    work_w, work_h = acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST]
     damp_r, damp_a = acc[A_DAMPED_ROT], acc[A_DAMPED_AX]
+    loss_r, loss_a = acc[A_LOSS_ROT], acc[A_LOSS_AX]
     ts_top = x[kn.X_TS]
+    # the top drive (kinematic: the ideal speed source omega0)
+    mode = np.int64(p[kn.P_MODE])
+    drive = mode != kn.MODE_KINEMATIC
+    t_cmd = c[kn.C_T_CMD]
+    t_max, t_min, kp, ki = p[kn.P_T_MAX], p[kn.P_T_MIN], p[kn.P_KP], p[kn.P_KI]
+    c_end, c_mean = p[kn.P_LAG_END], p[kn.P_LAG_MEAN]
+    rate_step = p[kn.P_RATE] * h
+    z_top = tz[0]
+    hj = h / p[kn.P_J]
+    hj_top = hj / (1.0 + 0.5 * hj * z_top)        # the string's b + z Omega, trapezoidal
+    om_td, integral, tm, ref, a_otd, a_tm, a_wm, work_td = _load_drive(x, acc)
+    if not drive:
+        om_td = om0
     for _ in range(n_steps):
-        _arrivals(tbuf, toff, tn, tslot, steps, ta_in, tb_in)
-        _arrivals(abuf, aoff, an, aslot, steps, aa_in, ab_in)
+        lr = _arrivals(tbuf, toff, tn, tf, tz, tslot, steps, ta_in, tb_in)
+        la = _arrivals(abuf, aoff, an, af, az, aslot, steps, aa_in, ab_in)
         a_t, a_a = ta_in[mt - 1], aa_in[ma - 1]
         rate = (a_t - a_prev) / h          # the bottom torque's rate while the bit is held
-        # the top: speed imposed; hook force w0 unless the drawworks' speed limit holds it
-        ts_top = tb_in[0] + tz[0] * om0
+        # the top: speed imposed or the drive's inertia under its motor torque; hook force w0
+        # unless the drawworks' speed limit holds it
+        om_top, integral_m, om_td_new, tm_new, ref_new, t_bar = om0, integral, om0, tm, ref, tm
+        if drive:
+            if mode == kn.MODE_SPEED:
+                integral_m = integral + 0.5 * h * ki * (om0 - om_td)
+            om_td_new, tm_new, ref_new, t_bar = _drive_step(
+                mode, om_td, integral_m, tm, ref, tb_in[0] + z_top * om_td, om0, t_cmd,
+                rate_step, hj_top, kp, t_min, t_max, c_end, c_mean)
+            om_top = 0.5 * (om_td + om_td_new)
+        ts_top = tb_in[0] + z_top * om_top
         v_top = (w0 - ab_in[0]) / az[0]
         if v_top < v_min:
             v_top = v_min
@@ -171,12 +219,25 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
             k[kn.K_REFUSED] = 1
             break
         # the string: reflections at the BHA, junctions, the top
-        damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tslot, ta_in, tb_in, om0, om_int / h)
+        damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tslot, ta_in, tb_in, om_top,
+                                 om_int / h)
         damp_a += h * _junctions(abuf, aoff, an, az, ac, aslot, aa_in, ab_in, v_top, v_int / h)
-        work_td += h * ts_top * om0
+        work_td += h * ts_top * om_top
+        loss_r += h * lr
+        loss_a += h * la
         work_w += h * w0 * v_top
         work_h += h * (f_top - w0) * v_top
-        ptd += h * om0
+        ptd += h * om_top
+        a_otd += h * om_top
+        if drive:
+            a_tm += h * t_bar
+            a_wm += h * t_bar * om_top
+            if mode == kn.MODE_SPEED:          # the integral term, held within the limits
+                integral = min(max(integral_m + 0.5 * h * ki * (om0 - om_td_new), t_min), t_max)
+            om_td, tm, ref = om_td_new, tm_new, ref_new
+        else:                                  # the ideal source's torque is the string's
+            a_tm += h * ts_top
+            a_wm += h * ts_top * om0
         a_prev = a_t
         steps += 1
         if out_row < rows and steps % out_every == 0:
@@ -187,6 +248,7 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
             o[kn.O_T] = sum_t / (steps - sampled)
             o[kn.O_TS], o[kn.O_DELTA], o[kn.O_REGIME] = ts_top, delta, regime
             o[kn.O_W0], o[kn.O_OMEGA0], o[kn.O_G] = w0, om0, g
+            o[kn.O_OMEGA_TD], o[kn.O_TM] = om_td, tm if drive else ts_top
             if extra:
                 o[O_T_BOTTOM], o[O_F_BOTTOM], o[O_V_TOP], o[O_F_TOP] = t_bot, f_bot, v_top, f_top
             out_row += 1
@@ -205,6 +267,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tc, toff, tbuf, az, an, ac, aoff, abu
     acc[kn.A_OMEGA0] += (steps - k[kn.K_STEPS]) * h * om0
     k[kn.K_STEPS], k[kn.K_SAMPLED] = steps, sampled
     acc[kn.A_W], acc[kn.A_T] = a_w, a_tob
-    acc[kn.A_WORK_TOP_DRIVE], acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST] = work_td, work_w, work_h
+    _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, work_td)
+    acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST] = work_w, work_h
     acc[A_DAMPED_ROT], acc[A_DAMPED_AX] = damp_r, damp_a
+    acc[A_LOSS_ROT], acc[A_LOSS_AX] = loss_r, loss_a
     return out_row

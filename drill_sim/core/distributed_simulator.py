@@ -19,14 +19,17 @@ from . import kernel as kn
 from .distributed import StringWaves, WaveLine
 from .parameters import Groups, ParameterError
 from .simulator import Simulator
+from .top_drive import DriveGroups
 
 
 class _Line:
-    """The arrays of one wave line: impedances, ring-buffer lengths and offsets, dashpots."""
+    """The arrays of one wave line: impedances, ring buffers (N + 1 slots per direction for a
+    travel time of (N + f) steps), their offsets, the fractions f, dashpots."""
 
     def __init__(self, line: WaveLine) -> None:
         self.z = np.ascontiguousarray(line.z, dtype=np.float64)
-        self.n = np.ascontiguousarray(line.steps, dtype=np.int64)
+        self.n = np.ascontiguousarray(line.steps + 1, dtype=np.int64)
+        self.f = np.ascontiguousarray(line.frac, dtype=np.float64)
         self.c = np.ascontiguousarray(line.dashpot, dtype=np.float64)
         self.off = np.concatenate([[0], np.cumsum(2 * self.n)[:-1]]).astype(np.int64)
         self.buf = np.zeros(int(2 * self.n.sum()))
@@ -43,27 +46,34 @@ class _Line:
                 below += self.c[j - 1] * speed
         return below
 
-    def energy(self, h: float) -> float:
-        """Energy in the line: h sum (a^2 + b^2)/(4 z) over every slot."""
+    def energy(self, h: float, steps: int) -> float:
+        """Energy in transit after ``steps`` steps: h (a^2 + b^2)/(4 z) of every departure still
+        on its way, the oldest (slot ``steps`` mod (N + 1)) for the fraction f of it."""
         total = 0.0
         for j in range(self.n.size):
             o, m = self.off[j], self.n[j]
-            total += float(np.sum(self.buf[o:o + 2 * m] ** 2)) / (4.0 * self.z[j])
+            oldest = steps % m
+            e = float(np.sum(self.buf[o:o + 2 * m] ** 2))
+            e -= (1.0 - self.f[j]) * (self.buf[o + oldest] ** 2 + self.buf[o + m + oldest] ** 2)
+            total += e / (4.0 * self.z[j])
         return h * total
 
 
 class StringSimulator(Simulator):
-    """The RGD bit on a distributed string. ``waves`` must be built at this step (waves.h)."""
+    """The RGD bit on a distributed string. ``waves`` must be built at this step (waves.h);
+    ``drive``: the top drive (default kinematic), whose inertia is the string's top boundary
+    in speed and torque mode (``distributed_kernel``)."""
 
     def __init__(self, groups: Groups, waves: StringWaves, *, stick_window: float = 4 * math.pi,
-                 hoist_speed_limit: float = math.inf, nodes: int | None = None) -> None:
+                 hoist_speed_limit: float = math.inf, nodes: int | None = None,
+                 drive: DriveGroups | None = None) -> None:
         self.waves = waves
         self._t, self._a = _Line(waves.torsion), _Line(waves.axial)
         m = max(self._t.n.size, self._a.n.size)
         self._scratch = np.zeros((4, m))
         self._slots = np.zeros((2, m), dtype=np.int64)
         super().__init__(groups, waves.h, stick_window=stick_window,
-                         hoist_speed_limit=hoist_speed_limit, nodes=nodes)
+                         hoist_speed_limit=hoist_speed_limit, nodes=nodes, drive=drive)
 
     def _extend(self) -> None:
         if self._x.size != dk.NXD:
@@ -74,12 +84,19 @@ class StringSimulator(Simulator):
     # ---- starts --------------------------------------------------------------------------
     def start_steady(self, w0: float, omega0: float, perturbation: float = 0.0) -> None:
         """Steady drilling everywhere: the string turns at omega0 carrying the steady torque
-        (plus the dashpots' share above each), moves at v0 carrying w0; BHA speed perturbed."""
+        (plus the dashpots' share above each), moves at v0 carrying w0; BHA speed perturbed.
+        A top drive in the loop turns at omega0 under the torque at the top of the string (its
+        motor torque, PI integral term and torque command)."""
         self._extend()
         super().start_steady(w0, omega0, perturbation)
         st = self.steady_state
         x = self._x
         x[kn.X_TS] = self._t.fill_steady(st.t0, omega0)
+        d = self.drive
+        if d.mode != "kinematic" and not d.t_min <= x[kn.X_TS] <= d.t_max:
+            raise ParameterError(f"steady drilling needs a motor torque of {x[kn.X_TS]:.4g} C, "
+                                 f"outside the drive's limits [{d.t_min:.4g}, {d.t_max:.4g}] C")
+        x[kn.X_TM] = x[kn.X_TREF] = x[kn.X_DRIVE_I] = self._c[kn.C_T_CMD] = x[kn.X_TS]
         x[dk.X_F_TOP] = self._a.fill_steady(w0, st.v0)
         x[kn.X_PHI_TD] = self._twist(st.t0, omega0)
         x[dk.X_T_BOTTOM], x[dk.X_F_BOTTOM], x[dk.X_V_TOP] = st.t0, w0, st.v0
@@ -118,7 +135,7 @@ class StringSimulator(Simulator):
     def advance_into(self, n_steps: int, out: np.ndarray, every: int, row: int) -> int:
         t, a = self._t, self._a
         row = int(dk.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
-                             t.z, t.n, t.c, t.off, t.buf, a.z, a.n, a.c, a.off, a.buf,
+                             t.z, t.n, t.f, t.c, t.off, t.buf, a.z, a.n, a.f, a.c, a.off, a.buf,
                              self._scratch, self._slots, n_steps, out, every, row))
         if self._k[kn.K_REFUSED]:
             self._refuse_step()
@@ -144,14 +161,22 @@ class StringSimulator(Simulator):
 
     def energy(self) -> tuple[float, float]:
         """Stored energy (torsional [C], axial [F* L*]): string waves plus the BHA's kinetic
-        energy (I = 1; M = 1/psi in these units)."""
+        energy (I = 1; M = 1/psi in these units) plus, with a top drive in the loop, the
+        drive's, j Omega_TD^2 / 2."""
         x = self._x
-        return (self._t.energy(self.dt) + 0.5 * x[kn.X_OMEGA] ** 2,
-                self._a.energy(self.dt) + 0.5 * x[kn.X_V] ** 2 / self.groups.psi)
+        drive = 0.0 if self.drive.mode == "kinematic" else 0.5 * self.drive.j * x[kn.X_OMEGA_TD]**2
+        return (self._t.energy(self.dt, self.steps) + 0.5 * x[kn.X_OMEGA] ** 2 + drive,
+                self._a.energy(self.dt, self.steps) + 0.5 * x[kn.X_V] ** 2 / self.groups.psi)
 
     def damped(self) -> tuple[float, float]:
         """Energy the dashpots dissipated over the window (torsional [C], axial [F* L*])."""
         return float(self._acc[dk.A_DAMPED_ROT]), float(self._acc[dk.A_DAMPED_AX])
+
+    def transport_loss(self) -> tuple[float, float]:
+        """Energy the transport's weighting of two departures (a fractional travel time)
+        dissipated over the window (torsional [C], axial [F* L*]): second order in h for
+        smooth waves, O(h) per passage of a jump (a stick, a landing)."""
+        return float(self._acc[dk.A_LOSS_ROT]), float(self._acc[dk.A_LOSS_AX])
 
 
 def line_c_last(waves: StringWaves) -> float:

@@ -184,7 +184,9 @@ class StringGeometry:
     Following the model contract (section 8): the pipe is the torsional spring
     (C = G J_pipe / L_pipe), the collars are the rigid BHA (I = rho J_collar L_collar,
     M = rho A_collar L_collar), and the submerged weight is the buoyed weight of pipe and
-    collars together.
+    collars together. The distributed string (``string_model: distributed``) also takes the
+    pipe's viscous damping per unit length, torsional [N m s/rad per m of pipe] and axial
+    [N s/m per m of pipe]; 0 (the default) is a lossless pipe; the lumped model ignores them.
     """
 
     pipe_length_m: float
@@ -196,12 +198,16 @@ class StringGeometry:
     shear_modulus_pa: float = 77e9
     steel_density_kg_m3: float = 8000.0
     mud_density_kg_m3: float = 1200.0
+    torsional_damping_nm_s_per_rad_m: float = 0.0
+    axial_damping_n_s_per_m2: float = 0.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
             object.__setattr__(self, f.name, check_number(
                 f.name, getattr(self, f.name),
-                low_inclusive=f.name in ("pipe_id_m", "collar_id_m", "mud_density_kg_m3")))
+                low_inclusive=f.name in ("pipe_id_m", "collar_id_m", "mud_density_kg_m3",
+                                         "torsional_damping_nm_s_per_rad_m",
+                                         "axial_damping_n_s_per_m2")))
         for part in ("pipe", "collar"):
             od, inner = getattr(self, f"{part}_od_m"), getattr(self, f"{part}_id_m")
             if inner >= od:

@@ -76,8 +76,9 @@ class Rig:
     the string rises no faster (default unlimited); top_drive: the drive (default kinematic,
     the seed's ideal speed source; ``set_top_drive`` changes it at run time). string_model:
     ``lumped`` (default) or ``distributed`` (a ``StringSimulator`` of ``geometry``, the
-    preset's ``string``, at the same step, with the kinematic top drive; the SI face is the
-    same, but ``replace_parameters`` is refused).
+    preset's ``string``, at the same step, any top drive: in speed and torque mode its inertia
+    is the string's top boundary; the SI face is the same, but ``replace_parameters`` is
+    refused).
     """
 
     def __init__(self, params: RigParameters, dt_s: float | None = None, *,
@@ -94,6 +95,7 @@ class Rig:
         dt = DEFAULT_DT if dt_s is None else check_number("dt_s", dt_s) / ts
         _check_step(dt * ts, params, self.top_drive)
         self.sim = self._simulator(dt, geometry)
+        self.geometry = geometry               # the pipe of the distributed string
         self._torque_nm = 0.0
         self.set_stick_window(4.0 * math.pi * ts if stick_window_s is None else stick_window_s)
         self.set_hoist_speed_limit(hoist_speed_limit_m_s)
@@ -105,14 +107,11 @@ class Rig:
         """The lumped ``Simulator`` or, for the distributed model, a ``StringSimulator``."""
         if self.string_model == "lumped":
             return Simulator(self.groups, dt, drive=self._drive_groups(self.params, self.top_drive))
-        if self.top_drive.top_drive_mode != "kinematic":
-            raise ParameterError("string_model = 'distributed' runs with the kinematic top drive "
-                                 f"only (top_drive_mode = {self.top_drive.top_drive_mode!r}); "
-                                 "expected top_drive_mode = 'kinematic' or the lumped string")
         if geometry is None:
             raise ParameterError("string_model = 'distributed' needs geometry: the preset's "
                                  "string (a StringGeometry); a preset with 'lumped' has none")
-        return StringSimulator(self.groups, geometry_waves(self.params, geometry, dt))
+        return StringSimulator(self.groups, geometry_waves(self.params, geometry, dt),
+                               drive=self._drive_groups(self.params, self.top_drive))
 
     # ---- conversions --------------------------------------------------------------------
     @property

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
-from .parameters import ParameterError, RigParameters
+from .parameters import ParameterError, RigParameters, StringGeometry
 from .rig import Rig
 from .top_drive import TopDriveParameters
 
@@ -97,13 +97,31 @@ def tick_refusal(rate_hz: float, dt_s: float) -> str | None:
             "tick is a whole number of steps, e.g. the start rate divided by a whole number")
 
 
-def make_rig(p: dict[str, object], dt_s: float | None = None) -> Rig:
+def make_rig(p: dict[str, object], dt_s: float | None = None,
+             geometry: StringGeometry | None = None) -> Rig:
     """The rig of a session's parameters, not yet started; its step is ``step_s(p)`` unless
-    ``dt_s`` [s] is given (a recorded session's own step)."""
+    ``dt_s`` [s] is given (a recorded session's own step). ``string_model`` (absent: lumped,
+    as in sessions recorded before it existed) ``distributed`` needs ``geometry``, the
+    preset's pipe (the node's) or the one a bag's ``string`` record kept (``bag resim``)."""
     return Rig(rig_parameters(p), dt_s=step_s(p) if dt_s is None else dt_s,
                stick_window_s=p["stick_slip_window_s"],
                hoist_speed_limit_m_s=p["hoist_speed_limit_m_s"],
-               top_drive=top_drive_parameters(p))
+               top_drive=top_drive_parameters(p),
+               string_model=p.get("string_model", "lumped"), geometry=geometry)
+
+
+def geometry_record(geometry: StringGeometry) -> dict[str, str]:
+    """The pipe geometry as a bag's ``string`` metadata record (field -> exact text)."""
+    return {f.name: repr(float(getattr(geometry, f.name))) for f in fields(StringGeometry)}
+
+
+def geometry_from_record(record: dict[str, str]) -> StringGeometry:
+    """The geometry ``geometry_record`` wrote (ParameterError if it is not one)."""
+    names = {f.name for f in fields(StringGeometry)}
+    try:
+        return StringGeometry(**{k: float(v) for k, v in record.items() if k in names})
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"string record {record!r}: not a pipe geometry ({exc})") from None
 
 
 def start(rig: Rig, p: dict[str, object]) -> None:

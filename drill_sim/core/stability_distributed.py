@@ -29,8 +29,9 @@ from .stability import SteadyState, steady_state, winding_number
 
 
 def simulated(line: WaveLine) -> WaveLine:
-    """The line with the delays the simulation uses (steps * h), for comparisons at 1e-3."""
-    return WaveLine(line.z, line.steps * line.h, line.steps, line.dashpot, line.h)
+    """The line with the delays the simulation uses ((steps + frac) h: the geometry's, but
+    for segments shorter than a step), for comparisons at 1e-3."""
+    return WaveLine(line.z, line.simulated_delay, line.steps, line.dashpot, line.h, line.frac)
 
 
 def characteristic(s: np.ndarray | complex, groups: Groups, steady: SteadyState,
@@ -115,18 +116,25 @@ def _newton_from_grid(box, f, density: int) -> np.ndarray:
 
 
 def natural_frequencies(waves: StringWaves, psi: float, count: int = 3,
-                        omega_max: float = 60.0) -> tuple[np.ndarray, np.ndarray]:
-    """The undamped string's angular frequencies off bottom [1/t*] (bit free, top speed and hook
-    force held): torsional roots of s^2 m12 - m22 and axial of s^2 m11 - psi m21 at s = i omega
-    (the axial rigid-body mode s = 0 excluded); dashpots are ignored."""
+                        omega_max: float = 60.0,
+                        top_inertia: float = math.inf) -> tuple[np.ndarray, np.ndarray]:
+    """The undamped string's angular frequencies off bottom [1/t*] (bit free, hook force held;
+    the rigid-body modes s = 0 excluded); dashpots are ignored. Axial: roots of
+    s^2 m11 - psi m21 at s = i omega. Torsional, top speed held (``top_inertia`` inf): roots of
+    s^2 m12 - m22; with the top drive's inertia j = ``top_inertia`` [I] at the top under a held
+    motor torque (T_top = -j s^2 phi_top, the BHA s^2 phi_bit = T_bit):
+    s^2 (m11 - j s^2 m12) - (m21 - j s^2 m22), whose j -> inf limit is the former."""
     def lossless(line: WaveLine) -> WaveLine:
-        return WaveLine(line.z, line.delay, line.steps, 0.0 * line.dashpot, line.h)
+        return WaveLine(line.z, line.delay, line.steps, 0.0 * line.dashpot, line.h, line.frac)
 
     tor, ax = lossless(waves.torsion), lossless(waves.axial)
 
     def f_t(om):
-        _, m12, _, m22 = tor.transfer(1j * om)
-        return (-om * om * m12 - m22).real
+        m11, m12, m21, m22 = tor.transfer(1j * om)
+        if top_inertia == math.inf:
+            return (-om * om * m12 - m22).real
+        js2 = -top_inertia * om * om
+        return (-om * om * (m11 - js2 * m12) - (m21 - js2 * m22)).real
 
     def f_a(om):
         m11, _, m21, _ = ax.transfer(1j * om)

@@ -51,7 +51,7 @@ class RigNode(Node):
         super().__init__(rig_topics.NODE_NAME, **kwargs)
         try:
             self.preset, self._specs, self.p = parameters.declare(self)
-            self.rig = session.make_rig(self.p)
+            self.rig = session.make_rig(self.p, geometry=self.preset.string)
             session.start(self.rig, self.p)
             self.sensors = session_sensors(self.p, self.rig.dt_s)   # what ~/measured/ shows
         except (ParameterError, NoSteadyDrilling) as exc:

@@ -155,6 +155,11 @@ def specs(preset: Preset) -> list[Spec]:
              "clock; " + START_ONLY),
         Spec("max_speed", False, "with publish_clock: step as fast as possible",
              read_only="it chooses the node's tick loop; " + START_ONLY),
+        Spec("string_model", preset.string_model, "the drill string's model: lumped (one "
+             "torsional spring on the BHA) or distributed (the preset's pipe carrying torsional "
+             "and axial waves, msg_docs/model.md); default the preset's",
+             read_only="the model's state is made at start (bag resim re-runs it); "
+             + START_ONLY, choices=("lumped", "distributed")),
         Spec("dt_s", DEFAULT_DT * t_star, "largest integration step; the step used is the "
              "largest divisor of the tick 1/rate_hz not above it", "s", 1e-7, 0.01,
              "the model's step must stay well below t* (0.21 s on base)",

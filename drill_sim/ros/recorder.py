@@ -22,7 +22,7 @@ from .. import __version__
 from ..bag.writer import BagError, BagWriter
 from ..core.rig import Rig
 from ..core.sensor_profile import SensorProfile
-from ..core.session import key_figures
+from ..core.session import geometry_record, key_figures
 from ..wire import WireError, cdr, rig_topics
 from ..wire.rig_topics import RigTopic
 
@@ -149,4 +149,4 @@ def _context(p: dict[str, object], rig: Rig, preset: str, node: str, stamp_epoch
         "figures": {k: repr(v) for k, v in key_figures(rig.params).items()},
         "session": {"preset": preset, "node": node, "stamp_epoch_ns": str(stamp_epoch_ns),
                     "events_topic": events_topic, "step_s": repr(rig.dt_s)},
-    }
+    } | ({"string": geometry_record(rig.geometry)} if rig.string_model == "distributed" else {})

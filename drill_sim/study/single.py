@@ -71,7 +71,7 @@ def run_single(settings: RunSettings, *, output_interval: float | None = None,
     ``progress(fraction)`` is called between chunks."""
     s = settings
     sim = (Simulator(s.groups, s.dt, drive=s.drive) if s.waves is None
-           else StringSimulator(s.groups, s.waves))
+           else StringSimulator(s.groups, s.waves, drive=s.drive))
     if s.start == "steady":
         sim.start_steady(s.w0, s.omega0, s.perturbation)
     else:

@@ -72,3 +72,19 @@ def test_stability_distributed_roots_check_and_frequencies():
     assert "torsional 0.555, 1.830, 3.271 Hz; axial 1.858, 4.078 Hz" in text
     lumped = json.loads(run("stability", "--json").stdout)
     assert "string_model" not in lumped and lumped["complete"]
+
+
+def test_simulate_distributed_with_the_top_drive_in_the_loop():
+    """--string-model distributed with --top-drive-mode speed and torque: the speed PI keeps
+    the mean top-drive speed at the command (1 %); a held motor torque off bottom spins the
+    string up (the mean motor torque is the command)."""
+    common = ("simulate", "--preset", "base", "--string-model", "distributed", "--json")
+    speed = json.loads(run(*common, "--rpm", "60", "--wob-kn", "100", "--duration", "60",
+                           "--top-drive-mode", "speed").stdout)
+    assert speed["string_model"] == "distributed"
+    assert speed["mean_top_drive_speed"] == pytest.approx(speed["top_drive_speed"], rel=1e-2)
+    torque = json.loads(run(*common, "--start", "rest", "--gap", "1", "--wob-kn", "0",
+                            "--duration", "5", "--top-drive-mode", "torque",
+                            "--motor-torque-knm", "5").stdout)
+    assert torque["mean_motor_torque"] == pytest.approx(5e3, rel=1e-9)
+    assert torque["mean_top_drive_speed"] > 0.0

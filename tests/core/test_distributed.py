@@ -72,9 +72,16 @@ def test_wave_travel_and_section_change():
     sim.set_commands(0.0, 0.1)
     d1, d2 = waves.torsion.delay
     rows = sim.record(2 * d1 + 0.2, H)
-    arrival = np.argmax(np.abs(rows[:, dk.O_T_BOTTOM]) > 0.0) * H     # step k ends at (k+1) h
+    # the front (step means, smeared over a step per fractional travel time) crosses half its
+    # height at the step midpoints' time (k + 1/2) h = the travel time
+    torque = rows[:, dk.O_T_BOTTOM]
+    k = int(np.argmax(np.abs(torque) > 0.0))
+    plateau = torque[k + 5]
+    i = int(np.argmax(np.abs(torque) >= 0.5 * abs(plateau)))
+    y0, y1 = abs(torque[i - 1]), abs(torque[i])
+    arrival = (i - 0.5 + (0.5 * abs(plateau) - y0) / (y1 - y0)) * H
     assert abs(arrival - (d1 + d2)) <= H
-    first = rows[np.argmax(np.abs(rows[:, dk.O_T_BOTTOM]) > 0.0), dk.O_T_BOTTOM]
+    first = plateau
     assert first / (2 * z2 * 0.1) == pytest.approx(2 * z1 / (z1 + z2), rel=1e-2)
     back = rows[round((2 * d1 + 0.1) / H), kn.O_TS]                  # the top after 2 D1
     assert (z1 * 0.1 - back) / (2 * z1 * 0.1) == pytest.approx((z1 - z2) / (z1 + z2), rel=1e-2)
@@ -111,8 +118,7 @@ def test_growth_at_the_rightmost_root(name, w0, omega0, duration, fit_from):
 def test_light_pipe_is_the_lumped_model():
     """(4) A pipe of negligible inertia (density 1e-4 of steel's, stiffness kept) follows the
     lumped model's trajectory while perturbations grow (bit speed within 1e-4 over 10 t*,
-    where the perturbation itself reaches ~1e-2): the pipe's bottom torque is C (phi_td - phi).
-    Stationary stick-slip statistics are NOT yet within 1 % (see msg_docs/model.md)."""
+    where the perturbation itself reaches ~1e-2): the pipe's bottom torque is C (phi_td - phi)."""
     p = load_preset("base")
     groups = p.rig.groups
     waves = string_waves(p.rig, (Section(1000.0, 0.127, 0.108),), H, steel_density_kg_m3=0.8)
@@ -129,10 +135,32 @@ def test_light_pipe_is_the_lumped_model():
     assert np.max(np.abs(out[1].w - out[0].w)) < 2e-3
 
 
+@pytest.mark.parametrize("h", [5e-4, 4e-4])
+def test_light_pipe_stick_slip_statistics_are_the_lumped_models(h):
+    """(4) Stationary stick-slip on the light pipe: stick fraction and SSI within 1e-3 of the
+    lumped model's at the base groups, at two steps (measured 1e-4). The pipe's stiffness is
+    z/D: travel times rounded to whole steps (D = 0.0153 t*, 31 steps) made it 1.2 % off at
+    h = 5e-4 and -0.8 % at 4e-4, and the statistics 3.3 % and 2.4 % off; the fractional
+    travel time removes that."""
+    p = load_preset("base")
+    waves = string_waves(p.rig, (Section(1000.0, 0.127, 0.108),), h, steel_density_kg_m3=0.8)
+    stats = []
+    for sim in (Simulator(p.rig.groups, h), StringSimulator(p.rig.groups, waves)):
+        sim.start_steady(9.6, 1.32, 1e-3)
+        sim.run(200.0)
+        sim.reset_window()
+        m = sim.run(400.0).metrics
+        stats.append((m.stick_fraction, m.ssi))
+    (sf_l, ssi_l), (sf_d, ssi_d) = stats
+    assert sf_l > 0.3
+    assert sf_d == pytest.approx(sf_l, rel=1e-3)
+    assert ssi_d == pytest.approx(ssi_l, rel=1e-3)
+
+
 @pytest.mark.parametrize("damping", [0.0, 0.3])
 def test_energy_balance_in_stick_slip(damping):
-    """(5) Work of the top drive = stored energy change + bit and dashpot dissipation, and
-    likewise axially for the hook force (0.5 %), over a stick-slip run."""
+    """(5) Work of the top drive = stored energy change + bit and dashpot dissipation + the
+    transport's loss, and likewise axially for the hook force (0.5 %), over a stick-slip run."""
     p = load_preset("base")
     waves = geometry_waves(p.rig, p.string, H, torsional_damping=damping)
     sim = StringSimulator(p.rig.groups, waves)
@@ -142,11 +170,11 @@ def test_energy_balance_in_stick_slip(damping):
     e0 = sim.energy()
     m = sim.run(100.0).metrics
     e1 = sim.energy()
-    damped = sim.damped()
+    damped, loss = sim.damped(), sim.transport_loss()
     assert m.stick_fraction > 0.05 or damping > 0.0
-    rot = m.dissipated_rotation + damped[0] + e1[0] - e0[0]
+    rot = m.dissipated_rotation + damped[0] + loss[0] + e1[0] - e0[0]
     assert rot == pytest.approx(m.work_top_drive, rel=5e-3)
-    ax = m.dissipated_axial + damped[1] + e1[1] - e0[1]
+    ax = m.dissipated_axial + damped[1] + loss[1] + e1[1] - e0[1]
     assert ax == pytest.approx(m.work_weight + m.work_hoist, rel=5e-3)
     if damping:
         assert damped[0] > 0.05 * m.work_top_drive
