@@ -98,6 +98,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--plot", type=Path, help="bit speed and surface torque of every law "
                         "against time (.png, .pdf...); one file per scenario, suffixed with its "
                         "name, when there are several")
+    parser.add_argument("--ros", action="store_true",
+                        help="run each law through the installed nodes in lockstep (the rig node "
+                             "and drill_sim_controller) and score the rig's samples; steady "
+                             "scenarios (--rpm, --wob-kn) only")
+    parser.add_argument("--ros-controller", metavar="COMMAND", default=None,
+                        help="with --ros: score this controller command line instead (it must "
+                             "answer each tick on the rig's ~/cmd/top_drive_torque with the "
+                             "tick's stamp; run under the namespace the rig gets); one row, "
+                             "named by the first law of --laws")
     parser.add_argument("--json", action="store_true",
                         help="print the table as one JSON object (strict: null, never NaN)")
 
@@ -125,15 +134,26 @@ def run(args: argparse.Namespace) -> int:
                            sensor_seed=whole("--sensor-seed", args.sensor_seed, 0, 2**63 - 1))
         build_law(preset, one, law_top_drive(preset, law, drive))   # bad gains: before any run
         settings.append(one)
+    if args.ros_controller is not None and not args.ros:
+        raise UsageError("--ros-controller needs --ros")
+    if args.ros_controller is not None:
+        settings = settings[:1]
+        if settings[0].law == "kinematic":
+            raise UsageError("--ros-controller: the row's law must be a torque law (the rig "
+                             "runs in torque mode); expected e.g. --laws z_torque")
     progress = Progress("drill_sim control")
     results: list[LoopResult] = []
-    total = len(scenarios) * len(laws)
+    total = len(scenarios) * len(settings)
     try:
         for i, scenario in enumerate(scenarios):
             for j, one in enumerate(settings):
-                done = i * len(laws) + j
-                results.append(run_loop(preset, scenario, one,
-                                        progress=lambda f, d=done: progress((d + f) / total)))
+                done = i * len(settings) + j
+                def report(f: float, d: int = done) -> None:
+                    progress((d + f) / total)
+                if args.ros:
+                    results.append(_ros_row(preset, scenario, one, args.ros_controller, report))
+                else:
+                    results.append(run_loop(preset, scenario, one, progress=report))
     finally:
         progress.close()
     document = _document(args, preset.name, drive, h, results)
@@ -146,6 +166,21 @@ def run(args: argparse.Namespace) -> int:
     else:
         _print_table(document, args)
     return 0
+
+
+def _ros_row(preset, scenario: Scenario, settings: LoopSettings, user: str | None,
+             progress) -> LoopResult:
+    """One law through the nodes in lockstep, scored on the rig's samples."""
+    from ..control.evaluation import sample_metrics
+    from ..ros.evaluation import check_steady, run_ros
+    check_steady(scenario)
+    series = run_ros(preset, scenario, settings, user_command=user, progress=progress)
+    drive = None if settings.law == "kinematic" else law_top_drive(preset, settings.law,
+                                                                    settings.top_drive)
+    return sample_metrics(preset, series, scenario.window_start_s, drive,
+                          law="user" if user else settings.law, scenario=scenario.name,
+                          sensor_profile=settings.sensor_profile,
+                          string_model=settings.string_model)
 
 
 def _scenarios(args: argparse.Namespace) -> list[Scenario]:
@@ -215,6 +250,7 @@ def _document(args: argparse.Namespace, preset_name: str, drive, h: float,
               results: list[LoopResult]) -> dict:
     rows = [{"name": r.law, **r.row()} for r in results]
     return {"preset": preset_name, "sample_period_s": h, "sensor_profile": args.sensor_profile,
+            "loop": "ros-lockstep" if args.ros else "offline",
             "sensor_seed": args.sensor_seed,
             "string_model": args.string_model,
             "tuning": "published" if args.published_gains else "reference",

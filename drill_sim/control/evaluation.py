@@ -221,7 +221,8 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
     current = rig.commanded_speed_rad_s if speed_law else rig.commanded_motor_torque_nm
     output = active.bumpless_start(current, measure(sample))
     names = ("time_s", "bit_speed_rad_s", "top_drive_speed_rad_s", "surface_torque_nm",
-             "motor_torque_nm", "law_output", "stuck")
+             "motor_torque_nm", "law_output", "stuck", "bit_depth_m", "top_drive_angle_rad",
+             "wob_n")
     series = {k: np.empty(n + 1) for k in names}
     _record(series, 0, sample, output)
     window_k = max(1, math.ceil(scenario.window_start_s / h - 1e-9))
@@ -258,6 +259,9 @@ def _record(series: dict[str, np.ndarray], k: int, s: RigSample, output: float) 
     series["motor_torque_nm"][k] = s.motor_torque_nm
     series["law_output"][k] = output
     series["stuck"][k] = s.stuck
+    series["bit_depth_m"][k] = s.bit_depth_m
+    series["top_drive_angle_rad"][k] = s.top_drive_angle_rad
+    series["wob_n"][k] = s.wob_n
 
 
 def _result(preset: Preset, scenario: Scenario, settings: LoopSettings,
@@ -290,6 +294,48 @@ def _result(preset: Preset, scenario: Scenario, settings: LoopSettings,
         mean_surface_torque_nm=m["mean_surface_torque_nm"],
         saturation_fraction=saturated, saturation_time_s=saturated * window_s,
         mse_pa=mse, window_s=window_s, series=series)
+
+
+def sample_metrics(preset: Preset, series: Mapping[str, np.ndarray], window_start_s: float,
+                   drive: TopDriveParameters | None, *, law: str, scenario: str,
+                   sensor_profile: str = "ideal", string_model: str = "lumped") -> LoopResult:
+    """The metrics of a loop from its samples alone (what a recording of the rig's topics
+    holds), over the samples from ``window_start_s`` on: SSI and bit speeds of the samples,
+    stick fraction of stuck samples, ROP from the bit's depth, saturation of the applied motor
+    torque at the drive's limits (``drive`` None: none), MSE from the mean WOB and the string
+    torque's work at the top, Σ T_s,k (Φ_TD,k+1 − Φ_TD,k). ``drill_sim control --ros`` scores
+    with it; the offline loop's own metrics use the kernel's running integrals instead."""
+    t = np.asarray(series["time_s"])
+    w = t >= window_start_s - 1e-9
+    speed = np.asarray(series["bit_speed_rad_s"])[w]
+    torque = np.asarray(series["surface_torque_nm"])[w]
+    depth = np.asarray(series["bit_depth_m"])[w]
+    angle = np.asarray(series["top_drive_angle_rad"])[w]
+    span = t[w][-1] - t[w][0]
+    drilled = depth[-1] - depth[0]
+    mean = float(speed.mean())
+    if drive is None:
+        saturated = math.nan
+    else:
+        motor = np.asarray(series["motor_torque_nm"])[w]
+        tol = 1e-9 * (drive.motor_torque_max_nm - drive.motor_torque_min_nm)
+        saturated = float(np.mean((motor >= drive.motor_torque_max_nm - tol)
+                                  | (motor <= drive.motor_torque_min_nm + tol)))
+    area = math.pi * preset.rig.bit_radius_m ** 2
+    work = float(np.sum(torque[:-1] * np.diff(angle)))
+    mse = (float(np.mean(np.asarray(series["wob_n"])[w][1:])) / area + work / (area * drilled)
+           if drilled > 0.0 else math.nan)
+    return LoopResult(
+        law=law, scenario=scenario, sensor_profile=sensor_profile, string_model=string_model,
+        ssi=float((speed.max() - speed.min()) / (2.0 * mean)) if mean > 0 else math.inf,
+        stick_fraction=float(np.mean(np.asarray(series["stuck"])[w] > 0)),
+        mean_rop_m_h=drilled / span * 3600.0 if span > 0 else math.nan,
+        mean_bit_speed_rpm=mean / RPM, min_bit_speed_rpm=float(speed.min()) / RPM,
+        max_bit_speed_rpm=float(speed.max()) / RPM,
+        surface_torque_p2p_nm=float(torque.max() - torque.min()),
+        surface_torque_rms_nm=float(torque.std()), mean_surface_torque_nm=float(torque.mean()),
+        saturation_fraction=saturated, saturation_time_s=saturated * span, mse_pa=mse,
+        window_s=float(span), series=dict(series))
 
 
 def run_laws(preset: Preset | str, scenario: Scenario, laws: Sequence[str],
