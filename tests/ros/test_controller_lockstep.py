@@ -1,8 +1,8 @@
 """The offline loop and the nodes in lockstep are the same loop: the installed rig node (torque
 mode, lockstep on its motor-torque command) and drill_sim_controller give, sample by sample, the
 bit speed and motor torque ``drill_sim.control.evaluation.run_loop`` computes in-process for the
-same law, gains, sample instants and start (steady at 60 rpm, set-point 70 rpm: a transient
-that the law must work through)."""
+same law, gains, sample instants and start (steady at 60 rpm, set-point 61 rpm: a transient
+that the law must work through, its integral off the limits)."""
 
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ def test_lockstep_nodes_reproduce_the_offline_loop(ros):
     ros.create_subscription(WrenchStamped, f"{RIG}/top_drive/motor_wrench",
                             lambda m: motor.__setitem__(stamp(m), m.wrench.torque.z), 10000)
     controller = ["-p", f"rig:={RIG}", "-p", "inputs:=exact",
-                  "-p", f"initial_speed_setpoint_rad_s:={70 * RPM!r}",
+                  "-p", f"initial_speed_setpoint_rad_s:={61 * RPM!r}",
                   *(a for k, v in gains.items() for a in ("-p", f"z_torque.{k}:={float(v)!r}"))]
     with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={NS}",
                      "-p", "top_drive_mode:=torque", "-p", "publish_clock:=true",
@@ -51,7 +51,7 @@ def test_lockstep_nodes_reproduce_the_offline_loop(ros):
         wait_for(lambda: bit and motor and min(max(bit), max(motor)) * 1e-9 >= DURATION_S,
                  ros, 240.0,
                  f"{DURATION_S} s of lockstep ticks")
-    offline = run_loop(preset, Scenario("step", ((0.0, 70.0),), ((0.0, 100.0),),
+    offline = run_loop(preset, Scenario("step", ((0.0, 61.0),), ((0.0, 100.0),),
                                         duration_s=DURATION_S, window_start_s=0.5,
                                         start_rpm=60.0),
                        LoopSettings(law="z_torque", gains=gains, perturbation=0.0))
@@ -61,6 +61,6 @@ def test_lockstep_nodes_reproduce_the_offline_loop(ros):
     ros_bit = np.array([bit[s] for s in stamps])
     ros_motor = np.array([motor[s] for s in stamps])
     off_bit, off_motor = offline.series["bit_speed_rad_s"], offline.series["motor_torque_nm"]
-    assert np.ptp(off_motor) > 1000.0 and np.ptp(off_bit) > 0.5     # the transient is real
+    assert np.ptp(off_motor) > 30.0 and np.ptp(off_bit) > 5e-3      # the transient is real
     assert np.allclose(ros_bit, off_bit, rtol=0.0, atol=1e-9 * math.tau)
     assert np.allclose(ros_motor, off_motor, rtol=1e-12, atol=1e-6)
