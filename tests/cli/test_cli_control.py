@@ -78,3 +78,21 @@ def test_rpm_without_wob_is_refused(capsys):
 def test_unknown_scenario_set_is_refused(capsys):
     assert main(["control", "--scenarios", "grid,nope"]) == 2
     assert "nope" in capsys.readouterr().err
+
+
+def test_main_job_switches_the_scenarios_controller_on_and_compares(tmp_path):
+    """A scenario with a controller section: the rig starts on its own speed loop, the driver
+    switches drill_sim_controller on at on_at_s, the summary compares before and after."""
+    from rosutil import isolate
+    isolate()
+    scenario = tmp_path / "on.yaml"
+    scenario.write_text("description: steady, then Z-Torque\ninitial_state: steady\n"
+                        "duration_s: 7.0\npoints:\n  - {at_s: 0.0, rpm: 60.0, wob_kn: 100.0}\n"
+                        "controller: {law: z_torque, on_at_s: 2.5}\n")
+    proc = subprocess.run([installed("drill_sim"), "run", "--scenario", str(scenario),
+                           "--no-record", "--plot", str(tmp_path / "on.png")],
+                          capture_output=True, text=True, timeout=180, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "controller z_torque switched on at" in proc.stderr + proc.stdout   # the driver
+    assert "controller z_torque switched on at 2.5 s: SSI" in proc.stdout       # the summary
+    assert "stick-slip: no stick-slip before the switch" in proc.stdout
