@@ -61,7 +61,8 @@ def spin(node, seconds: float) -> None:
 
 class TorqueController:
     """A PI on the top-drive speed [rad/s] -> motor torque [N m], one command per sample
-    received: the load of a stick-slip controller closing the loop at the node's rate."""
+    received: the load of a stick-slip controller closing the loop at the node's rate. It
+    reads what a controller under test reads: ~/measured/ (the sensor profile's)."""
 
     KP_NM_S_RAD, KI_NM_RAD, SET_RAD_S, DT_S = 15e3, 14.5e3, 2 * np.pi, 1e-3
 
@@ -72,9 +73,9 @@ class TorqueController:
         self.msg = WrenchStamped()
         self.msg.header.frame_id = "top_drive"
         self.sent = 0
-        node.create_subscription(WrenchStamped, f"{ns}/drill_sim/top_drive/motor_wrench",
+        node.create_subscription(WrenchStamped, f"{ns}/drill_sim/measured/top_drive/motor_wrench",
                                  self._start, 10)
-        node.create_subscription(TwistStamped, f"{ns}/drill_sim/top_drive/twist",
+        node.create_subscription(TwistStamped, f"{ns}/drill_sim/measured/top_drive/twist",
                                  self._on_speed, 1000)
 
     def _start(self, m: WrenchStamped) -> None:

@@ -16,17 +16,22 @@ WALL0_NS = 1_700_000_000_000_000_000
 
 
 def session_bag(path, ticks: int, *, rate_hz: float = 100.0, speedup: float = 10.0,
-                node: str = "/drill_sim", chunk_size: int = 8192) -> None:
+                node: str = "/drill_sim", chunk_size: int = 8192,
+                recorded_step: bool = True) -> None:
     """A sim-time session of the base preset as the node records it: stamps count simulated
-    time from 0, log times are the wall clock running ``speedup`` times slower."""
+    time from 0, log times are the wall clock running ``speedup`` times slower.
+    recorded_step False: as the node recorded before its step divided the tick (stepping at
+    ``dt_s`` itself, the step not in the metadata)."""
     p = {s.name: s.default for s in specs(load_preset("base"))}
     p.update(publish_clock=True, rate_hz=rate_hz, max_speed=True, record=str(path))
-    rig = session.make_rig(p)
+    rig = session.make_rig(p, None if recorded_step else p["dt_s"])
     session.start(rig, p)
     sensors = session_sensors(p, rig.dt_s)
     meta = {"parameters": {k: str(v) for k, v in sorted(p.items())},
             "session": {"preset": "base", "node": node, "stamp_epoch_ns": "0",
-                        "events_topic": f"{node}/events", "step_s": repr(rig.dt_s)}}
+                        "events_topic": f"{node}/events"}}
+    if recorded_step:
+        meta["session"]["step_s"] = repr(rig.dt_s)
     enc = RigEncoders(with_clock=False)
     topics = [t.under(node) for t in enc.topics]
     with BagWriter(path, metadata=meta, chunk_size=chunk_size,

@@ -10,8 +10,10 @@ import numpy as np
 def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
                      top_drive_speed: np.ndarray, wob: np.ndarray, tob: np.ndarray,
                      surface_torque: np.ndarray, stuck: np.ndarray, *, units: dict[str, str],
-                     title: str, marks: dict[float, str] | None = None) -> None:
+                     title: str, motor_torque: np.ndarray | None = None,
+                     marks: dict[float, str] | None = None) -> None:
     """Write a three-panel PNG; ``units`` labels the axes (time, speed, force, torque);
+    ``motor_torque``, when given, is drawn with the torques (the top drive's motor);
     ``marks``: time -> label, drawn as dashed vertical lines (a controller switched on)."""
     import matplotlib
     matplotlib.use("Agg")
@@ -20,7 +22,7 @@ def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 7.5), constrained_layout=True)
     ax = axes[0]
     ax.plot(time, bit_speed, lw=0.8, label="bit")
-    ax.plot(time, top_drive_speed, "k--", lw=0.8, label="top drive (command)")
+    ax.plot(time, top_drive_speed, "k--", lw=0.8, label="top drive")
     if np.any(stuck):
         ax.fill_between(time, 0, 1, where=stuck, color="tab:red", alpha=0.15,
                         transform=ax.get_xaxis_transform(), label="stuck", step="mid")
@@ -31,6 +33,8 @@ def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
     axes[1].set_ylabel(f"WOB [{units['force']}]")
     axes[2].plot(time, tob, lw=0.8, color="tab:orange", label="on bit")
     axes[2].plot(time, surface_torque, lw=0.8, color="tab:purple", label="surface (string)")
+    if motor_torque is not None:
+        axes[2].plot(time, motor_torque, lw=0.8, color="tab:gray", label="top-drive motor")
     axes[2].set_ylabel(f"torque [{units['torque']}]")
     axes[2].legend(loc="upper right", fontsize=8)
     axes[2].set_xlabel(f"time [{units['time']}]")
@@ -46,12 +50,16 @@ def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
 
 
 def plot_rig_series(path: str | Path, series, title: str,
+                    motor_torque_nm: np.ndarray | None = None,
                     marks: dict[float, str] | None = None) -> None:
-    """The rig's SI series (drill_sim.bag.series.RigSeries) in rpm, kN and kN m."""
+    """The rig's SI series (drill_sim.bag.series.RigSeries) in rpm, kN and kN m, with the
+    motor torque [N m] at its samples when given."""
     from ..core import RPM
     t = series.time_s - series.time_s[0]
     plot_time_series(path, t, series.bit_speed_rad_s / RPM, series.top_drive_speed_rad_s / RPM,
                      series.wob_n / 1e3, series.tob_nm / 1e3, series.surface_torque_nm / 1e3,
                      series.stuck,
                      units={"time": "s", "speed": "rpm", "force": "kN", "torque": "kN m"},
-                     title=title, marks=marks)
+                     title=title,
+                     motor_torque=None if motor_torque_nm is None else motor_torque_nm / 1e3,
+                     marks=marks)

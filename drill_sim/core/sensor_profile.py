@@ -34,7 +34,7 @@ CHANNELS: tuple[str, ...] = (
 )
 SEVERITY = "stick_slip_severity"
 DEFAULT_SEVERITY_WINDOW_S = 10.0
-MAX_BUFFERED_SAMPLES = 10_000_000    # per channel: samples waiting out their delay
+MAX_BUFFERED_SAMPLES = 1_000_000     # per channel: samples waiting out their delay
 
 
 @dataclass(frozen=True)

@@ -16,14 +16,15 @@ is one tick; per channel, in the order a physical chain has them:
    sample without noise (as if the signal had been steady before the start).
 
 The stick-slip severity is computed downhole: (max - min) / (2 mean) of the exact bit speed over
-consecutive windows of ``window_s``, held between window ends (0 before the first; capped at
-``SEVERITY_MAX``, which a bit stopped for a whole window shows), then measured like the others.
+consecutive windows of ``window_s`` (the mean over the window's calls), held between window
+ends (0 before the first; capped at ``SEVERITY_MAX``, which a bit stopped for a whole window
+shows), then measured like the others.
 
 Noise comes from one numpy Generator per channel, spawned from ``SeedSequence(seed)`` (so a
 channel's noise does not depend on the other channels' rates) and drawn in blocks into a fixed
-buffer; the delay lives in a fixed ring buffer. A call allocates nothing but its result, and the
-whole bank is one compiled kernel call; the same profile, dt_s, seed and calls give the same
-measurements bit for bit.
+buffer; the delay lives in a fixed ring buffer. The kernel allocates nothing (a call builds only
+its inputs and result), and the whole bank is one compiled kernel call; the same profile, dt_s,
+seed and calls give the same measurements bit for bit.
 """
 
 from __future__ import annotations
@@ -35,7 +36,13 @@ import numba as nb
 import numpy as np
 
 from .parameters import ParameterError
-from .sensor_profile import CHANNELS, SEVERITY, SensorProfile, load_profile
+from .sensor_profile import (
+    CHANNELS,
+    MAX_BUFFERED_SAMPLES,
+    SEVERITY,
+    SensorProfile,
+    load_profile,
+)
 
 SEVERITY_MAX = 10.0          # the severity shown when the bit's mean speed over a window is <= 0
 NOISE_BLOCK = 4096           # normal deviates drawn at a time, per channel
@@ -99,7 +106,16 @@ class SensorBank:
         self._par = np.array([[s.period_s, s.delay_s, s.noise_std, s.bias, s.quantum,
                                s.filter_tau_s] for s in specs], dtype=np.float64)
         # samples waiting out the delay: at most delay / (sampling interval) + 2
-        cap = max(math.ceil(s.delay_s / max(s.period_s, self.dt_s)) + 2 for s in specs)
+        waiting = [s.delay_s / max(s.period_s, self.dt_s) for s in specs]
+        for c, w in zip(CHANNELS, waiting, strict=True):
+            if w > MAX_BUFFERED_SAMPLES:
+                raise ParameterError(
+                    f"sensor profile {self.profile.name!r}, channel {c}: delay_s = "
+                    f"{self.profile.channels[c].delay_s:g} s sampled every "
+                    f"{max(self.profile.channels[c].period_s, self.dt_s):g} s would buffer more "
+                    f"than {MAX_BUFFERED_SAMPLES:,} samples; expected a shorter delay or a "
+                    "lower rate_hz")
+        cap = max(math.ceil(w) for w in waiting) + 2
         self._ring = np.zeros((n, cap, 2))
         self._noise = np.zeros((n, NOISE_BLOCK))
         self._state = np.zeros((n, 5))
@@ -119,19 +135,38 @@ class SensorBank:
         for rng, row in zip(self._rngs, self._noise, strict=True):
             rng.standard_normal(out=row)
         self._state[:] = 0.0
+        self._last_time_s = -math.inf
         self._istate[:] = 0
         self._window[:] = 0.0
         self._window[W_END] = math.nan
 
+    def warm_up(self) -> None:
+        """Load (or compile) the kernel now, on scratch copies: the state stays untouched, so
+        a real-time caller's first tick does not wait for the compiler."""
+        _measure_kernel(0.0, self._x.copy(), self._par, self._state.copy(),
+                        self._istate.copy(), self._ring.copy(), self._noise, self._window.copy(),
+                        self._window_s, self._out.copy(), self._fresh.copy())
+
     def measure(self, time_s: float, sample: object) -> Measured:
         """The measurements at ``time_s`` [s] (not before the last call's) of ``sample``, any
-        object with the ``RigSample`` fields named in ``CHANNELS`` (SI)."""
-        x = self._x
-        for i, name in enumerate(_SAMPLE_FIELDS):
-            x[i] = getattr(sample, name)
-        return self._measure(float(time_s))
+        object with the ``RigSample`` fields named in ``CHANNELS`` (SI). A time that is not
+        finite or goes back, or a value that is not finite, raises ParameterError naming it,
+        and the bank's state is unchanged."""
+        time_s = float(time_s)
+        if not time_s >= self._last_time_s or math.isinf(time_s):
+            raise ParameterError(f"sensor time {time_s!r} s: expected a finite time not before "
+                                 f"the last call's ({self._last_time_s:g} s); the sensors' "
+                                 "state is unchanged")
+        values = [getattr(sample, name) for name in _SAMPLE_FIELDS]
+        for name, v in zip(_SAMPLE_FIELDS, values, strict=True):
+            if not math.isfinite(v):
+                raise ParameterError(f"exact {name} = {v!r}: expected a finite number; the "
+                                     "sensors' state is unchanged")
+        self._x[:len(values)] = values
+        return self._measure(time_s)
 
     def _measure(self, time_s: float) -> Measured:
+        self._last_time_s = time_s
         refill = _measure_kernel(time_s, self._x, self._par, self._state, self._istate,
                                  self._ring, self._noise, self._window, self._window_s,
                                  self._out, self._fresh)
@@ -156,6 +191,15 @@ class SensorBank:
         inputs = np.zeros((n, len(CHANNELS)))
         for i, c in enumerate(_SAMPLE_FIELDS):
             inputs[:, i] = columns[c]
+            if not np.isfinite(inputs[:, i]).all():
+                k = int(np.flatnonzero(~np.isfinite(inputs[:, i]))[0])
+                raise ParameterError(f"exact {c} = {float(inputs[k, i])!r} at row {k}: expected "
+                                     "finite numbers; the sensors' state is unchanged")
+        if n and not (np.isfinite(times).all() and times[0] >= self._last_time_s
+                      and (np.diff(times) >= 0).all()):
+            raise ParameterError("sensor times: expected finite times in ascending order, "
+                                 f"not before the last call's ({self._last_time_s:g} s); the "
+                                 "sensors' state is unchanged")
         out = np.empty((n, len(CHANNELS)))
         fresh = np.empty((n, len(CHANNELS)), dtype=np.bool_)
         k = 0
@@ -163,7 +207,9 @@ class SensorBank:
             k = _series_kernel(k, times, inputs, self._par, self._state, self._istate,
                                self._ring, self._noise, self._window, self._window_s, out, fresh)
             self._refill()
-        self._out[:] = out[-1] if n else self._out
+        if n:
+            self._out[:] = out[-1]
+            self._last_time_s = float(times[-1])
         result = {c: out[:, i].copy() for i, c in enumerate(CHANNELS)}
         result.update({f"fresh_{c}": fresh[:, i].copy() for i, c in enumerate(CHANNELS)})
         return result

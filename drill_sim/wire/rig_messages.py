@@ -27,13 +27,19 @@ class RigEncoders:
             for t in self.topics]
         self._measured = [t.source == rig_topics.MEASURED for t in self.topics]
 
-    def sample(self, stamp_ns: int, s: RigSample, m: Measured | None = None) -> list[bytes]:
+    def sample(self, stamp_ns: int, s: RigSample, m: Measured | None = None,
+               only: list[bool] | None = None) -> list[bytes]:
         """One tick's messages stamped ``stamp_ns`` [ns], in the order of ``topics``: the
         exact ones from ``s``, the ``~/measured/`` ones from ``m`` (None: the ideal sensors'
-        reading of ``s``, ``core.sensors.exact_measured``)."""
+        reading of ``s``, ``core.sensors.exact_measured``). only: which to encode (the others
+        are empty bytes); None: all."""
         if m is None:
             from ..core.sensors import exact_measured
             m = exact_measured(s)
         sec, nsec = divmod(stamp_ns, 1_000_000_000)
+        if only is not None:
+            return [encode(sec, nsec, m if measured else s) if wanted else b""
+                    for encode, measured, wanted in zip(self._encoders, self._measured, only,
+                                                        strict=True)]
         return [encode(sec, nsec, m if measured else s)
                 for encode, measured in zip(self._encoders, self._measured, strict=True)]

@@ -249,3 +249,43 @@ def test_a_series_measured_offline_equals_the_calls_one_by_one():
         m = b.measure(times[k], sample(**{c: columns[c][k] for c in EXACT}))
         for i, c in enumerate(CHANNELS):
             assert series[c][k] == m[1 + i] and series[f"fresh_{c}"][k] == m.fresh[i], (k, c)
+
+
+def test_warm_up_leaves_the_state_untouched():
+    def first(b: SensorBank) -> tuple:
+        return tuple(b.measure(k * 1e-3, sample()) for k in range(50))
+
+    warmed = SensorBank("surface_rig", 1e-3, 2)
+    warmed.warm_up()
+    assert first(warmed) == first(SensorBank("surface_rig", 1e-3, 2))
+
+
+def test_bad_times_and_values_are_refused_and_leave_the_state_intact():
+    def run_good(b: SensorBank, ks) -> list:
+        return [b.measure(k * 1e-3, sample(wob_n=1e5 + k)) for k in ks]
+
+    clean, hit = SensorBank("mud_pulse", 1e-3, 1), SensorBank("mud_pulse", 1e-3, 1)
+    expected = run_good(clean, range(200))
+    got = run_good(hit, range(100))
+    for t, s, words in ((float("nan"), sample(), "sensor time nan"),
+                        (0.05, sample(), "not before the last call's"),
+                        (float("inf"), sample(), "sensor time inf"),
+                        (0.2, sample(tob_nm=float("nan")), "exact tob_nm = nan"),
+                        (0.2, sample(wob_n=float("-inf")), "exact wob_n = -inf")):
+        with pytest.raises(ParameterError, match="state is unchanged") as err:
+            hit.measure(t, s)
+        assert words in str(err.value)
+    got += run_good(hit, range(100, 200))
+    assert got == expected
+    with pytest.raises(ParameterError, match="ascending"):
+        hit.measure_series(np.array([0.5, 0.4]), {c: np.ones(2) for c in EXACT})
+    with pytest.raises(ParameterError, match="exact wob_n = nan at row 1"):
+        hit.measure_series(np.array([0.5, 0.6]), {**{c: np.ones(2) for c in EXACT},
+                                                   "wob_n": np.array([1.0, np.nan])})
+
+
+def test_a_delay_too_long_for_every_tick_sampling_is_refused_at_construction():
+    profile = profile_from_dict("long", {"channels": {"tob_nm": {"delay_s": 1e4}}})
+    with pytest.raises(ParameterError, match=r"channel tob_nm: delay_s = 10000 s .* more than"):
+        SensorBank(profile, 1e-3)
+    SensorBank(profile, 0.1)            # 1e5 samples at a 0.1 s tick: fine

@@ -9,16 +9,19 @@ which is all lockstep asks of a controller.
 --step-at-s T --step-to X: instead of the PI, command --hold-speed, and X [rad/s] from the
 sample stamped T [s] on (to see exactly when a command lands). --ticks 0: answer for ever.
 A sample published again (same stamp) gets the same command again and is not counted.
-Prints ``answered N`` when done (it then stops answering, so the rig waits).
+Prints ``answered N in S s`` when done (S: wall time from the first answer to the last; it
+then stops answering, so the rig waits).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 
 import rclpy
 from geometry_msgs.msg import TwistStamped
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from std_srvs.srv import SetBool
@@ -35,6 +38,7 @@ class BitSpeedPI(Node):
         self.integral = 0.0
         self.last_s: float | None = None
         self.last_stamp: tuple[int, int] | None = None
+        self.first_wall = self.last_wall = 0.0
         self.pub = self.create_publisher(TwistStamped, f"{args.rig}/cmd/top_drive", 10)
         self.sub = self.create_subscription(TwistStamped, f"{args.rig}/bit/twist",
                                             self.on_sample, 10)
@@ -62,6 +66,9 @@ class BitSpeedPI(Node):
         self.cmd.header.stamp = sample.header.stamp           # the tick this answers
         self.cmd.twist.angular.z = min(max(speed, 0.0), a.max_speed)
         self.pub.publish(self.cmd)
+        self.last_wall = time.monotonic()
+        if not self.answered:
+            self.first_wall = self.last_wall
         self.answered += 1
 
 
@@ -77,10 +84,11 @@ def main() -> int:
     parser.add_argument("--step-to", type=float, default=10.0, help="[rad/s]")
     parser.add_argument("--hold-speed", type=float, default=6.283185307179586, help="[rad/s]")
     parser.add_argument("--resume", action="store_true")
+    parser.add_argument("--executor", choices=("events", "single"), default="events")
     args = parser.parse_args()
     rclpy.init()
     node = BitSpeedPI(args)
-    executor = EventsExecutor()
+    executor = EventsExecutor() if args.executor == "events" else SingleThreadedExecutor()
     executor.add_node(node)
     try:
         while node.pub.get_subscription_count() == 0 or node.sub.get_publisher_count() == 0:
@@ -95,7 +103,8 @@ def main() -> int:
         print("connected", flush=True)
         while not args.ticks or node.answered < args.ticks:
             executor.spin_once(timeout_sec=0.1)
-        print(f"answered {node.answered}", flush=True)
+        print(f"answered {node.answered} in {node.last_wall - node.first_wall:.6f} s",
+              flush=True)
     except KeyboardInterrupt:
         pass
     finally:

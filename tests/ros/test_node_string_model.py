@@ -7,7 +7,7 @@ import json
 import subprocess
 
 from conftest import installed
-from geometry_msgs.msg import TwistStamped
+from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rosgraph_msgs.msg import Clock
 from rosutil import NodeProcess, call_service, set_double, wait_for
 from std_srvs.srv import Trigger
@@ -76,6 +76,40 @@ def test_distributed_session_is_recorded_and_resimulated_exactly(ros, tmp_path):
     longer = tmp_path / "longer_pipe"
     _with_metadata(bag, longer, lambda m: m["string"].update(pipe_length_m="1001.0"))
     assert not _resim(longer)["exact"]
+
+
+def test_distributed_string_under_the_torque_mode_drive_resimulates_exactly(ros, tmp_path):
+    """string_model:=distributed with top_drive_mode:=torque: a motor torque command well above
+    the steady torque speeds the drive up (its inertia is the pipe's top), and the session's
+    re-run is exact."""
+    bag = tmp_path / "string_torque"
+    rig = "/strq/drill_sim"
+    clock: list[float] = []
+    speeds: list[float] = []
+    ros.create_subscription(Clock, "/clock", lambda m: clock.append(
+        m.clock.sec + 1e-9 * m.clock.nanosec), 10)
+    ros.create_subscription(TwistStamped, f"{rig}/top_drive/twist",
+                            lambda m: speeds.append(m.twist.angular.z), 1000)
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/strq", "-p",
+                     f"record:={bag}", "-p", "publish_clock:=true", "-p", "max_speed:=true",
+                     "-p", "rate_hz:=200.0", "-p", "string_model:=distributed", "-p",
+                     "top_drive_mode:=torque"):
+        torque = ros.create_publisher(WrenchStamped, f"{rig}/cmd/top_drive_torque", 10)
+        wait_for(lambda: torque.get_subscription_count() > 0 and speeds, ros, 30.0,
+                 "the rig running and subscribed")
+        speed0 = speeds[-1]
+        msg = WrenchStamped()
+        msg.header.frame_id = "top_drive"
+        msg.wrench.torque.z = 30e3
+        torque.publish(msg)
+        wait_for(lambda: speeds[-1] > speed0 + 0.5, ros, 60.0, "the drive to speed up")
+        t = clock[-1]
+        wait_for(lambda: clock[-1] > t + 0.5, ros, 60.0, "half a simulated second more")
+    meta = reader.info(bag).metadata
+    assert meta["parameters"]["string_model"] == "distributed"
+    assert meta["parameters"]["top_drive_mode"] == "torque"
+    r = _resim(bag)
+    assert r["exact"] and r["commands"] == 1, r
 
 
 def test_string_model_is_checked_at_start(ros):

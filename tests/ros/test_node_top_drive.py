@@ -7,10 +7,14 @@ T_max + (T0 - T_max) exp(-(t - t_c)/tau) from the tick t_c that took the command
 
 from __future__ import annotations
 
+import csv
+import json
 import math
+import subprocess
 from itertools import pairwise
 
 import pytest
+from conftest import installed
 from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rosutil import NodeProcess, spin_for, wait_for
 from sensor_msgs.msg import JointState
@@ -26,12 +30,11 @@ class _Rig:
     def __init__(self, ros, ns: str) -> None:
         self.ros, self.base = ros, f"{ns}/drill_sim"
         self.motor: list[tuple[float, float]] = []       # (stamp [s], motor torque [N m])
+        self.motor_ns: dict[int, float] = {}              # stamp [ns] -> motor torque [N m]
         self.speed: list[float] = []                      # top-drive speed [rad/s]
         self.surface: list[tuple[float, float]] = []      # (surface torque [N m], hook load [N])
         ros.create_subscription(WrenchStamped, f"{self.base}/top_drive/motor_wrench",
-                                lambda m: self.motor.append(
-                                    (m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec,
-                                     m.wrench.torque.z)), 1000)
+                                self._on_motor, 1000)
         ros.create_subscription(TwistStamped, f"{self.base}/top_drive/twist",
                                 lambda m: self.speed.append(m.twist.angular.z), 1000)
         self.surface_at: dict[float, float] = {}         # stamp [s] -> surface torque [N m]
@@ -42,6 +45,11 @@ class _Rig:
         wait_for(lambda: len(self.motor) > 20 and self.torque.get_subscription_count() > 0
                  and self.joints.get_subscription_count() > 0, ros, 30.0,
                  f"the rig in {ns} running and subscribed")
+
+    def _on_motor(self, m: WrenchStamped) -> None:
+        stamp = m.header.stamp
+        self.motor.append((stamp.sec + 1e-9 * stamp.nanosec, m.wrench.torque.z))
+        self.motor_ns[stamp.sec * 1_000_000_000 + stamp.nanosec] = m.wrench.torque.z
 
     def _surface(self, m: WrenchStamped) -> None:
         self.surface.append((m.wrench.torque.z, m.wrench.force.z))
@@ -110,6 +118,21 @@ def test_torque_mode_applies_the_command_through_limit_and_lag_and_resim_is_exac
     result = resimulate(bag)
     assert result.exact, (result.explanation(), result.max_difference)
     assert result.commands > 3 and result.refused >= 1
+    # the bag tools show the motor torque the subscriber received, matched by stamp
+    csv_path = tmp_path / "torque.csv"
+    tool = subprocess.run([installed("drill_sim"), "bag", "export", str(bag), "--out",
+                           str(csv_path)], capture_output=True, text=True, timeout=120)
+    assert tool.returncode == 0, tool.stderr
+    with open(csv_path) as f:
+        rows = list(csv.DictReader(f))
+    exported = {int(r["stamp_ns"]): float(r["motor_torque_nm"]) for r in rows}
+    received = {ns: t for ns, t in rig.motor_ns.items() if ns in exported}
+    assert len(received) > 0.9 * len(rig.motor_ns)
+    assert all(exported[ns] == t for ns, t in received.items())
+    tool = subprocess.run([installed("drill_sim"), "bag", "metrics", str(bag), "--json"],
+                          capture_output=True, text=True, timeout=120)
+    mean = json.loads(tool.stdout)["mean_motor_torque_nm"]
+    assert mean == pytest.approx(sum(exported.values()) / len(exported), rel=1e-9)
 
 
 def test_kinematic_mode_refuses_torque_and_follows_joint_velocity_then_switches(ros):

@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 import json
 
+import numpy as np
+
 from ...bag.rig_stats import RigStats
 from ...bag.series import columns
 from . import window
@@ -20,14 +22,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     window.check(args)
+    motor_sum_nm, motor_n = 0.0, 0
     with window.samples(args) as s:
         stats = RigStats(s.topic)
         for ns, values in s.chunks:
             stats.add((ns - s.chunks.origin_ns) / 1e9, columns(values))
+            if s.motor is not None:
+                motor = s.motor.at(ns)
+                motor = motor[np.isfinite(motor)]
+                motor_sum_nm, motor_n = motor_sum_nm + float(motor.sum()), motor_n + motor.size
     status = s.verdict(args, stats.problems())
     if status:
         return status
     m = stats.result()
+    if motor_n:                        # the top drive's motor, when the bag has its torque
+        m["mean_motor_torque_nm"] = motor_sum_nm / motor_n
     problems = list(dict.fromkeys(s.problems + stats.problems()))
     if args.json:
         print(json.dumps({**m, "problems": problems}))

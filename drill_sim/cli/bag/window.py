@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ...bag.bag import Bag
+from ...bag.motor_series import StampMatched, motor_chunks, motor_topic
 from ...bag.rig_stats import Window, Windowed
 from ...bag.series import joint_chunks, joint_topic
 from ..errors import UsageError
@@ -55,6 +56,7 @@ class Samples:
     chunks: Windowed
     problems: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    motor: StampMatched | None = None     # the motor torque [N m] at the chunks' stamps
 
     def verdict(self, args: argparse.Namespace, more: list[str] = ()) -> int:
         """``partial.verdict`` on what was found (call once the chunks are read)."""
@@ -68,5 +70,6 @@ def samples(args: argparse.Namespace) -> Iterator[Samples]:
         name = joint_topic(bag, args.topic)
         problems, notes = partial.known(bag)
         window = Window(args.start, args.end, args.last)
+        motor = motor_topic(bag, name)
         yield Samples(name, Windowed(joint_chunks(bag, name, problems), window), problems,
-                      notes)
+                      notes, None if motor is None else StampMatched(motor_chunks(bag, motor)))

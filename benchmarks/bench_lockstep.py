@@ -1,0 +1,89 @@
+"""Wall time per lockstep tick with one closed-loop controller in another process [issue
+target: at most 0.3 ms a tick].
+
+A rig node in lockstep (``publish_clock``, ``lockstep``, ``start_paused``, 1000 Hz) runs in one
+process; the test suite's plain-rclpy PI controller (``tests/ros/lockstep_controller.py``: a
+subscription to ``~/bit/twist``, a publisher on ``~/cmd/top_drive``, EventsExecutor) runs in
+another, resumes the rig and answers --ticks samples. The controller times its first to its
+last answer; the figure is that over the ticks, with the CPU both processes used per tick.
+The machine's other load enters the figure: say how loaded it was.
+
+Run: .venv/bin/python benchmarks/bench_lockstep.py [--ticks 5000] [--record] [--repeat 3]
+         [--executor events|single]   (the controller's rclpy executor)
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import signal
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+BIN = Path(sys.executable).parent
+CONTROLLER = Path(__file__).resolve().parents[1] / "tests" / "ros" / "lockstep_controller.py"
+NS = "/bench_lockstep"
+
+
+def _cpu_s(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def run_once(ticks: int, record: Path | None, executor: str) -> tuple[float, float, float]:
+    """(wall ms, node CPU ms, controller CPU ms) per lockstep tick."""
+    args = [str(BIN / "drill_sim_node"), "--ros-args", "-r", f"__ns:={NS}",
+            "-p", "publish_clock:=true", "-p", "lockstep:=true", "-p", "start_paused:=true"]
+    if record is not None:
+        args += ["-p", f"record:={record}"]
+    node = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        ctl = subprocess.Popen([sys.executable, str(CONTROLLER), "--rig", f"{NS}/drill_sim",
+                                "--ticks", str(ticks), "--resume", "--executor", executor],
+                               stdout=subprocess.PIPE,
+                               text=True)
+        cpu_node0 = None
+        for line in ctl.stdout:
+            if line.startswith("connected"):
+                cpu_node0, cpu_ctl0 = _cpu_s(node.pid), _cpu_s(ctl.pid)
+            if line.startswith("answered"):
+                cpu_node, cpu_ctl = _cpu_s(node.pid), _cpu_s(ctl.pid)
+                wall_s = float(line.split(" in ")[1].split()[0])
+                break
+        else:
+            raise SystemExit("the controller stopped before answering every tick")
+        ctl.wait(timeout=30)
+    finally:
+        node.send_signal(signal.SIGINT)
+        node.wait(timeout=30)
+    per = 1e3 / ticks
+    return wall_s * per, (cpu_node - cpu_node0) * per, (cpu_ctl - cpu_ctl0) * per
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--ticks", type=int, default=5000)
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--record", action="store_true", help="the node records its bag too")
+    parser.add_argument("--executor", choices=("events", "single"), default="events")
+    args = parser.parse_args()
+    os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 230)))
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    print(f"lockstep, 1000 Hz, one PI controller in another process, {args.ticks} ticks"
+          f"{', recording' if args.record else ''}, controller executor {args.executor}; "
+          "load average "
+          f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    with tempfile.TemporaryDirectory() as tmp:
+        for k in range(args.repeat):
+            bag = Path(tmp) / f"run{k}" if args.record else None
+            wall, node_cpu, ctl_cpu = run_once(args.ticks, bag, args.executor)
+            print(f"run {k + 1}: {wall:.3f} ms wall a tick (target <= 0.3 ms), CPU "
+                  f"{node_cpu:.3f} ms node + {ctl_cpu:.3f} ms controller a tick; "
+                  f"{1.0 / wall:.2f} x real time")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,31 @@
+"""Matching the motor torque to the joint_states by stamp, streamed: values land on the
+samples stamped the same whatever the two topics' chunk boundaries, NaN where a sample has
+none (a bag cut short, a lost message)."""
+
+from __future__ import annotations
+
+from itertools import pairwise
+
+import numpy as np
+
+from drill_sim.bag.motor_series import StampMatched
+
+
+def test_values_land_on_equal_stamps_across_chunk_boundaries():
+    stamps = np.arange(0, 1000, 1, dtype=np.int64) * 1_000_000
+    values = np.sin(stamps * 1e-9)
+    lost = np.ones(stamps.size, bool)
+    lost[[5, 500, 999]] = False                              # never recorded
+    kept_ns, kept = stamps[lost], values[lost]
+    cuts = [0, 7, 300, 301, 640, kept_ns.size]               # the motor topic's chunks
+    matched = StampMatched(iter([(kept_ns[a:b], kept[a:b]) for a, b in pairwise(cuts)]))
+    got = np.concatenate([matched.at(stamps[a:b]) for a, b in ((0, 100), (100, 101),
+                                                               (101, 1000))])
+    assert np.array_equal(got[lost], values[lost])
+    assert np.all(np.isnan(got[~lost]))
+
+
+def test_an_empty_or_exhausted_topic_gives_nan():
+    matched = StampMatched(iter([]))
+    assert np.all(np.isnan(matched.at(np.array([1, 2, 3], np.int64))))
+    assert matched.at(np.array([], np.int64)).size == 0
