@@ -47,6 +47,7 @@ setup(
             "drill_sim = drill_sim.cli.main:main",
             "drill_sim_node = drill_sim.ros.node:main",
             "drill_sim_drive = drill_sim.ros.driver:main",
+            "drill_sim_controller = drill_sim.ros.controller:main",
             "drill_sim_record = drill_sim.cli.record:main",
             "drill_sim_replay = drill_sim.cli.replay:main",
         ],

@@ -11,7 +11,7 @@ import sys
 from collections.abc import Sequence
 
 from ..core import ParameterError
-from . import bag, map, run, simulate, stability
+from . import bag, control, map, run, simulate, stability
 from .checks import join_negative_values
 from .errors import Parser, UsageError
 
@@ -21,6 +21,8 @@ COMMANDS = {
     "run": (run, "the main job: rig node + scenario driver, live status, summary and plot"),
     "bag": (bag, "tools on rosbag2 MCAP bags: info, repair, metrics, export, plot, resim"),
     "stability": (stability, "steady drilling and the rightmost roots of Delta(s)"),
+    "control": (control, "score the reference stick-slip controllers (or yours) on a scenario "
+                         "set"),
     "map": (map, "stick-slip maps over rpm and WOB (or any two quantities), on every core or a "
                  "Dask cluster"),
 }

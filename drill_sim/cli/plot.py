@@ -10,9 +10,11 @@ import numpy as np
 def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
                      top_drive_speed: np.ndarray, wob: np.ndarray, tob: np.ndarray,
                      surface_torque: np.ndarray, stuck: np.ndarray, *, units: dict[str, str],
-                     title: str, motor_torque: np.ndarray | None = None) -> None:
+                     title: str, motor_torque: np.ndarray | None = None,
+                     marks: dict[float, str] | None = None) -> None:
     """Write a three-panel PNG; ``units`` labels the axes (time, speed, force, torque);
-    ``motor_torque``, when given, is drawn with the torques (the top drive's motor)."""
+    ``motor_torque``, when given, is drawn with the torques (the top drive's motor);
+    ``marks``: time -> label, drawn as dashed vertical lines (a controller switched on)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -38,12 +40,18 @@ def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
     axes[2].set_xlabel(f"time [{units['time']}]")
     for a in axes:
         a.grid(alpha=0.3)
+        for at in (marks or {}):
+            a.axvline(at, color="k", ls="--", lw=0.9)
+    for at, label in (marks or {}).items():
+        axes[0].annotate(label, (at, 1.0), xycoords=("data", "axes fraction"),
+                         xytext=(4, -12), textcoords="offset points", fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
 def plot_rig_series(path: str | Path, series, title: str,
-                    motor_torque_nm: np.ndarray | None = None) -> None:
+                    motor_torque_nm: np.ndarray | None = None,
+                    marks: dict[float, str] | None = None) -> None:
     """The rig's SI series (drill_sim.bag.series.RigSeries) in rpm, kN and kN m, with the
     motor torque [N m] at its samples when given."""
     from ..core import RPM
@@ -53,4 +61,5 @@ def plot_rig_series(path: str | Path, series, title: str,
                      series.stuck,
                      units={"time": "s", "speed": "rpm", "force": "kN", "torque": "kN m"},
                      title=title,
-                     motor_torque=None if motor_torque_nm is None else motor_torque_nm / 1e3)
+                     motor_torque=None if motor_torque_nm is None else motor_torque_nm / 1e3,
+                     marks=marks)

@@ -1,5 +1,7 @@
 """``drill_sim run``: the main job. The rig node and a scenario driver in subprocesses, a live
-status line, and at the end a summary and a plot."""
+status line, and at the end a summary and a plot. A scenario with a ``controller`` section also
+starts ``drill_sim_controller`` (disabled, the rig's drive on its own speed loop) and the driver
+switches it on at its time; the summary and the plot compare before and after."""
 
 from __future__ import annotations
 
@@ -26,6 +28,7 @@ from .errors import UsageError
 from .plot import plot_rig_series
 
 STATUS_WINDOW_S = 1.0          # the stretch of samples the status line names the regime of
+COMPARE_WINDOW_S = 10.0        # before/after a controller is switched on: the last ... of each
 
 MAX_DURATION_S = 1e6     # --duration [s] (documented in msg_docs/cli.md, "Limits")
 
@@ -50,6 +53,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="bag directory to record the session into (default: "
                              "drill_sim_session_<date>-<time> here)")
     parser.add_argument("--no-record", action="store_true", help="do not record the session")
+    parser.add_argument("--no-controller", action="store_true",
+                        help="ignore the scenario's controller section (the driller alone)")
     parser.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, default=[],
                         help="passed on to drill_sim_node (e.g. -p rate_hz:=500.0)")
 
@@ -80,6 +85,11 @@ def run(args: argparse.Namespace) -> int:
                 "-p", f"initial_state:={scenario.initial_state}",
                 *(("-p", f"record:={bag.absolute()}") if bag is not None else ()),
                 *args.ros_args]
+    switch = None if args.no_controller else scenario.controller
+    procs_before: list[list[str]] = []
+    if switch is not None:
+        node_cmd[2:2] = ["-p", "top_drive_mode:=speed"]     # the user's -p come later, and win
+        procs_before.append(controller_command(preset, switch.law))
     drive_cmd = [executable("drill_sim_drive"), args.scenario]
     env = dict(os.environ)
     rclpy.init()
@@ -96,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
             executor.spin_once(timeout_sec=0.05)
             node_exit = procs[0].poll()
         if node_exit is None:
+            procs += [subprocess.Popen(cmd, env=env) for cmd in procs_before]
             procs.append(subprocess.Popen(drive_cmd, env=env))
             node_exit = _live(executor, monitor, procs[0], duration, tty)
     except KeyboardInterrupt:
@@ -126,12 +137,65 @@ def run(args: argparse.Namespace) -> int:
         print("drill_sim run: no samples received from the rig", file=sys.stderr)
         return 1
     _summary(series, whence, scenario.name, preset.name)
-    plot_rig_series(args.plot, series, title=f"drill_sim run: {scenario.name} on {preset.name}")
+    marks = {}
+    if switch is not None:
+        compared = _before_after(series, switch.law, switch.on_at_s)
+        if compared:
+            marks[switch.on_at_s] = f"{switch.law} on: SSI {compared}"
+    plot_rig_series(args.plot, series, title=f"drill_sim run: {scenario.name} on {preset.name}",
+                    marks=marks)
     print(f"plot written to {args.plot}")
     if bag is not None and bag.is_dir():
         print(f"session recorded to {bag}: replay it with drill_sim_replay, re-run it with "
               f"drill_sim bag resim, or see drill_sim bag info|metrics|plot")
     return 0
+
+
+def controller_command(preset, law: str) -> list[str]:
+    """``drill_sim_controller``, disabled, for this preset's string and drive: the reference
+    gains (``control.reference``), the drive's limits, and the rig's drive mode managed (torque
+    when on, speed when off)."""
+    from ..control.reference import reference_gains
+    from ..control.tuning import pipe_impedance
+    drive = preset.top_drive
+    from ..wire import rig_topics
+    names = {t.name for t in rig_topics.TOPICS}
+    params = {"law": law, "enabled": False, "manage_drive_mode": True,
+              "inputs": "measured" if "~/measured/top_drive/twist" in names else "exact",
+              "impedance_nm_s_rad": pipe_impedance(preset),
+              "top_drive_inertia_kg_m2": drive.top_drive_inertia_kg_m2,
+              f"{law}.torque_min_nm": drive.motor_torque_min_nm,
+              f"{law}.torque_max_nm": drive.motor_torque_max_nm}
+    params.update({f"{law}.{k}": v for k, v in reference_gains(
+        law, preset, drive.top_drive_inertia_kg_m2).items()})
+    cmd = [executable("drill_sim_controller"), "--ros-args"]
+    for name, value in params.items():
+        text = str(value).lower() if isinstance(value, bool) else (
+            repr(float(value)) if isinstance(value, (int, float)) else value)
+        cmd += ["-p", f"{name}:={text}"]
+    return cmd
+
+
+def _before_after(series: RigSeries, law: str, on_s: float) -> str:
+    """Print SSI and stick fraction over the last COMPARE_WINDOW_S before the switch and at the
+    end; return "before → after" of the SSI ("" when the run did not reach the switch)."""
+    end = series.time_s[-1] - series.time_s[0]
+    if end < on_s + 2.0 or on_s < 2.0:
+        print(f"  controller {law}: the run ended before it was on long enough to compare")
+        return ""
+    before = series.window(max(0.0, on_s - COMPARE_WINDOW_S), on_s).metrics()
+    after = series.window(max(on_s, end - COMPARE_WINDOW_S), None).metrics()
+    print(f"  controller {law} switched on at {on_s:g} s: SSI {before['ssi']:.2f} -> "
+          f"{after['ssi']:.2f}, stick fraction {before['stick_fraction']:.2f} -> "
+          f"{after['stick_fraction']:.2f}, ROP {before['mean_rop_m_s'] * 3600:.1f} -> "
+          f"{after['mean_rop_m_s'] * 3600:.1f} m/h (the {before['duration_s']:.0f} s before, "
+          f"the last {after['duration_s']:.0f} s)")
+    if before["stick_fraction"] == 0.0:
+        verdict = "no stick-slip before the switch"
+    else:
+        verdict = "cleared" if after["stick_fraction"] == 0.0 else "not cleared"
+    print(f"  stick-slip: {verdict}")
+    return f"{before['ssi']:.2f} → {after['ssi']:.2f}"
 
 
 def _live(executor, monitor, node: subprocess.Popen, duration: float, tty: bool) -> int | None:

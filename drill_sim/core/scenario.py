@@ -4,7 +4,9 @@ A scenario YAML has ``duration_s``, the rig ``initial_state`` it expects (``stea
 ``rest``) and a list of ``points``; each point has ``at_s`` and sets one
 or both channels: top-drive speed (``rpm`` or ``top_drive_speed_rad_s``) and load (``wob_kn``,
 the available weight W0 = W_s - H0, or ``hook_load_kn``). With ``ramp: true`` the channels it sets
-ramp linearly from their previous set point; otherwise they step at ``at_s``.
+ramp linearly from their previous set point; otherwise they step at ``at_s``. An optional
+``controller: {law: z_torque, on_at_s: 35.0}`` switches a reference stick-slip controller
+(``drill_sim_controller``) on at that time: before it, the rig's drive runs its own speed loop.
 """
 
 from __future__ import annotations
@@ -30,6 +32,14 @@ class _Point:
 
 
 @dataclass(frozen=True)
+class ControllerSwitch:
+    """A reference controller (``law``) switched on at ``on_at_s`` [s] of the scenario."""
+
+    law: str
+    on_at_s: float
+
+
+@dataclass(frozen=True)
 class Scenario:
     """Set points for the top-drive speed [rad/s] and the hook load [N] against time [s]."""
 
@@ -39,6 +49,7 @@ class Scenario:
     initial_state: str          # the rig's initial_state this scenario is written for
     speed: tuple[_Point, ...]
     load: tuple[_Point, ...]
+    controller: ControllerSwitch | None = None
 
     def commands_at(self, t_s: float, submerged_weight_n: float) -> tuple[float, float]:
         """(top-drive speed [rad/s], hook load [N]) at time ``t_s``; W0 set points use W_s."""
@@ -105,4 +116,20 @@ def scenario_from_dict(name: str, data: object) -> Scenario:
         raise ParameterError(f"scenario {name!r}: initial_state = {initial!r}: expected steady "
                              "or rest")
     return Scenario(name, str(data.get("description", "")), duration, initial, tuple(speed),
-                    tuple(load))
+                    tuple(load), _controller(name, data.get("controller"), duration))
+
+
+CONTROLLER_LAWS = ("stiff_pi", "soft_speed", "z_torque", "off")
+
+
+def _controller(name: str, raw: object, duration_s: float) -> ControllerSwitch | None:
+    if raw is None:
+        return None
+    where = f"scenario {name!r} controller"
+    if not isinstance(raw, dict) or set(raw) != {"law", "on_at_s"}:
+        raise ParameterError(f"{where}: expected a mapping with law and on_at_s; got {raw!r}")
+    if raw["law"] not in CONTROLLER_LAWS:
+        raise ParameterError(f"{where}: law = {raw['law']!r}: expected one of "
+                             f"{', '.join(CONTROLLER_LAWS)}")
+    on = check_number(f"{where} on_at_s", raw["on_at_s"], low_inclusive=True, high=duration_s)
+    return ControllerSwitch(str(raw["law"]), on)

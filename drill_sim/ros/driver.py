@@ -3,7 +3,9 @@ speed and weight on bit (``drill_sim_drive hold --rpm 60 --wob-kn 100``).
 
 It reads the string's submerged weight from the rig node (to turn WOB set points into hook
 loads), waits until the rig subscribes to both command topics, then publishes the set points at
-``--rate-hz`` on the node's clock (so it follows ``/clock`` with ``use_sim_time:=true``).
+``--rate-hz`` on the node's clock (so it follows ``/clock`` with ``use_sim_time:=true``). A
+scenario with a ``controller`` section switches that controller node (``--controller``, a
+``drill_sim_controller``) on at its time by setting its ``enabled`` parameter.
 """
 
 from __future__ import annotations
@@ -13,7 +15,9 @@ import sys
 
 import rclpy
 from geometry_msgs.msg import TwistStamped, WrenchStamped
-from rcl_interfaces.srv import GetParameters
+from rcl_interfaces.msg import Parameter as ParameterMsg
+from rcl_interfaces.msg import ParameterType, ParameterValue
+from rcl_interfaces.srv import GetParameters, SetParameters
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.utilities import remove_ros_args
@@ -29,7 +33,7 @@ SPEED, HOOK = rig_topics.COMMAND_BY_RULE["top_drive"], rig_topics.COMMAND_BY_RUL
 
 class ScenarioDriver(Node):
     def __init__(self, scenario: Scenario, *, rig: str, rate_hz: float, loop: bool,
-                 reliability: str = "reliable") -> None:
+                 reliability: str = "reliable", controller: str = "drill_sim_controller") -> None:
         super().__init__("drill_sim_drive")
         self.scenario, self.loop = scenario, loop
         self.pub_speed = self.create_publisher(TwistStamped, SPEED.under(rig),
@@ -44,6 +48,9 @@ class ScenarioDriver(Node):
         self.speed_msg.header.frame_id = self.hook_msg.header.frame_id = rig_topics.FRAME_TOP_DRIVE
         self.create_timer(1.0 / rate_hz, self._tick)
         self._pending = None
+        self.controller_client = None if scenario.controller is None else self.create_client(
+            SetParameters, f"{controller}/set_parameters")
+        self.controller_on = False
 
     def _tick(self) -> None:
         if self.submerged_weight_n is None:
@@ -64,6 +71,9 @@ class ScenarioDriver(Node):
                 return
             self.t0_ns = now.nanoseconds
             t = 0.0
+        switch = self.scenario.controller
+        if switch is not None and not self.controller_on and t >= switch.on_at_s:
+            self._switch_on(switch.law, t)
         speed, hook = self.scenario.commands_at(t, self.submerged_weight_n)
         stamp = now.to_msg()
         self.speed_msg.header.stamp = self.hook_msg.header.stamp = stamp
@@ -71,6 +81,19 @@ class ScenarioDriver(Node):
         self.hook_msg.wrench.force.z = hook
         self.pub_speed.publish(self.speed_msg)
         self.pub_hook.publish(self.hook_msg)
+
+    def _switch_on(self, law: str, t: float) -> None:
+        """Set the controller's law and ``enabled`` (once its parameter service is there)."""
+        if not self.controller_client.service_is_ready():
+            return
+        self.controller_on = True
+        value = ParameterValue
+        self.controller_client.call_async(SetParameters.Request(parameters=[
+            ParameterMsg(name="law", value=value(type=ParameterType.PARAMETER_STRING,
+                                                 string_value=law)),
+            ParameterMsg(name="enabled", value=value(type=ParameterType.PARAMETER_BOOL,
+                                                     bool_value=True))]))
+        self.get_logger().info(f"controller {law} switched on at t = {t:.2f} s")
 
     def _ask_weight(self) -> None:
         if self._pending is None:
@@ -123,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rate-hz", type=float, default=50.0, help="command rate [Hz]")
     parser.add_argument("--loop", action="store_true", help="repeat the scenario")
     parser.add_argument("--qos-reliability", choices=RELIABILITIES, default=RELIABILITIES[0])
+    parser.add_argument("--controller", default="drill_sim_controller",
+                        help="the controller node a scenario's controller section switches on")
     hold = parser.add_argument_group("hold: a constant speed and weight")
     hold.add_argument("--rpm", type=float, help="top-drive speed [rpm]")
     hold.add_argument("--wob-kn", type=float, help="weight on bit W0 = W_s - H0 [kN]")
@@ -137,7 +162,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(str(exc))
     rclpy.init(args=argv)
     node = ScenarioDriver(scenario, rig=args.rig, rate_hz=args.rate_hz, loop=args.loop,
-                          reliability=args.qos_reliability)
+                          reliability=args.qos_reliability, controller=args.controller)
     try:
         while rclpy.ok() and not node.done:
             rclpy.spin_once(node, timeout_sec=0.1)

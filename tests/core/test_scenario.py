@@ -18,6 +18,10 @@ def test_shipped_scenarios():
     assert speed == pytest.approx(30 * RPM) and hook == ws         # spinning up, still hanging
     assert tag.commands_at(16.0, ws)[1] == pytest.approx(ws - 100e3)
     assert tag.commands_at(59.0, ws)[0] == pytest.approx(200 * RPM)
+    assert tag.controller is None
+    on = load_scenario("controller_on")
+    assert on.commands_at(59.0, ws)[0] == pytest.approx(60 * RPM)     # the controller clears it
+    assert on.controller.law == "z_torque" and on.controller.on_at_s == 35.0
     step = load_scenario("step_test")
     assert step.commands_at(9.99, ws)[0] == pytest.approx(60 * RPM)
     assert step.commands_at(10.0, ws)[0] == pytest.approx(120 * RPM)
@@ -38,6 +42,12 @@ def test_hook_load_set_points_and_clamping():
                                    {"at_s": 1, "rpm": 2}]}, "does not increase"),
     ({"duration_s": 10, "points": [{"at_s": 0, "rpm": 1, "torque": 1}]}, "expected a mapping"),
     ({"duration_s": 10, "points": [{"at_s": 0, "rpm": 1}]}, "one load"),
+    ({"duration_s": 10, "points": [{"at_s": 0, "rpm": 1, "wob_kn": 1}],
+      "controller": {"law": "pid", "on_at_s": 1}}, "law = 'pid'"),
+    ({"duration_s": 10, "points": [{"at_s": 0, "rpm": 1, "wob_kn": 1}],
+      "controller": {"law": "z_torque", "on_at_s": 11}}, "on_at_s"),
+    ({"duration_s": 10, "points": [{"at_s": 0, "rpm": 1, "wob_kn": 1}],
+      "controller": {"law": "z_torque"}}, "law and on_at_s"),
     ({"duration_s": 10, "initial_state": "upside", "points": [{"at_s": 0, "rpm": 1,
                                                                 "wob_kn": 1}]}, "initial_state"),
 ])

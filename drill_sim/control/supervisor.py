@@ -1,0 +1,93 @@
+"""A law in service: chosen and re-tuned at run time, enabled and disabled without a bump, with
+the figures a status report needs (saturation, wind-up). No ROS: the controller node is a thin
+adapter around it, and the offline loop and tests use it directly.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from ..core.parameters import ParameterError, check_number
+from . import LAWS, make_law
+from .laws import Law, SurfaceMeasurement
+
+
+class Supervisor:
+    """One law at sample period ``h_s`` [s], pipe impedance Z [N·m·s/rad] and J_TD [kg·m²].
+
+    ``step(m)`` returns the command for this sample, or None while disabled (the drive keeps
+    what it had). Enabling takes over from the motor torque the drive applies now (the
+    measurement's ``motor_torque_nm``); a new law or new gains take over from the last output.
+    """
+
+    def __init__(self, h_s: float, impedance_nm_s_rad: float, top_drive_inertia_kg_m2: float,
+                 law: str = "z_torque", gains: Mapping[str, float] | None = None, *,
+                 enabled: bool = True, speed_set_rad_s: float = 0.0) -> None:
+        self.h_s, self.z, self.j = h_s, impedance_nm_s_rad, top_drive_inertia_kg_m2
+        self.law = self.build(law, gains or {})
+        self.speed_set_rad_s = check_number("speed_set_rad_s", speed_set_rad_s, low=None)
+        self.law.reset(self.speed_set_rad_s)
+        self.enabled = bool(enabled)
+        self._started = False             # the law has taken over since the last enable
+        self.last_output: float | None = None
+        self.samples = self.saturated = self.wound_up = 0
+
+    def build(self, law: str, gains: Mapping[str, float]) -> Law:
+        """A law of these gains (ParameterError naming a bad one); nothing changes here."""
+        if law == "kinematic":
+            raise ParameterError("law = 'kinematic' is a speed pass-through, not a controller "
+                                 "of the motor torque: expected one of "
+                                 f"{', '.join(n for n in LAWS if n != 'kinematic')}")
+        return make_law(law, self.h_s, self.z, self.j, **dict(gains))
+
+    def replace_law(self, law: str, gains: Mapping[str, float]) -> None:
+        """Switch to ``law`` with ``gains``; bumpless: it takes over from the last output."""
+        new = self.build(law, gains)
+        new.reset(self.speed_set_rad_s)
+        self.law = new
+        self._started = False
+
+    def set_speed(self, speed_set_rad_s: float) -> None:
+        self.speed_set_rad_s = check_number("speed_set_rad_s", speed_set_rad_s, low=None)
+        self.law.set_speed(self.speed_set_rad_s)
+
+    def set_enabled(self, enabled: bool) -> None:
+        if enabled and not self.enabled:
+            self._started = False
+            self.last_output = None           # take over from what the drive applies
+        self.enabled = bool(enabled)
+
+    def step(self, m: SurfaceMeasurement) -> float | None:
+        if not self.enabled:
+            return None
+        if not self._started:
+            current = m.motor_torque_nm if self.last_output is None else self.last_output
+            out = self.law.bumpless_start(current, m)
+            self._started = True
+        else:
+            out = self.law.step(m)
+        self.last_output = out
+        self.samples += 1
+        limits = self.limits()
+        if limits is not None:
+            low, high = limits
+            tol = 1e-9 * (high - low)
+            if out >= high - tol or out <= low + tol:
+                self.saturated += 1
+            pi = getattr(self.law, "pi", None)
+            if pi is not None and (pi.q_nm >= high - tol or pi.q_nm <= low + tol):
+                self.wound_up += 1
+        return out
+
+    def limits(self) -> tuple[float, float] | None:
+        """The law's output limits [N·m] (None: a law without them)."""
+        pi = getattr(self.law, "pi", None)
+        return None if pi is None else (pi.torque_min_nm, pi.torque_max_nm)
+
+    def take_window(self) -> dict[str, float]:
+        """Figures since the previous call: samples, saturation and wind-up fractions."""
+        n = self.samples
+        out = {"samples": n, "saturation_fraction": self.saturated / n if n else 0.0,
+               "windup_fraction": self.wound_up / n if n else 0.0}
+        self.samples = self.saturated = self.wound_up = 0
+        return out

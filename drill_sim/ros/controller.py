@@ -1,0 +1,322 @@
+"""``drill_sim_controller``: a reference stick-slip controller closed around the rig node through
+the rig's documented topics only, as a user's controller would be (msg_docs/controller.md).
+
+Every rig tick it takes the top-drive speed, the motor torque applied and the surface torque
+(``~/measured/...`` by default, the exact ``~/top_drive/...`` with ``inputs:=exact``), steps
+the law once those three readings of the same stamp are in, and publishes the motor torque on
+the rig's ``~/cmd/top_drive_torque`` stamped with that sample's stamp (what the rig's lockstep
+mode waits for). The set-point is the speed on ``setpoint_topic`` (default the rig's own
+``~/cmd/top_drive``, so a driller's speed commands steer it). Law, gains and ``enabled`` change
+at run time, validated, without a bump; ``/diagnostics`` reports law, saturation and wind-up.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import sys
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import TwistStamped, WrenchStamped
+from rcl_interfaces.msg import Parameter as ParameterMsg
+from rcl_interfaces.msg import (
+    ParameterDescriptor,
+    ParameterType,
+    ParameterValue,
+    SetParametersResult,
+)
+from rcl_interfaces.srv import SetParameters
+from rclpy.executors import ExternalShutdownException
+from rclpy.experimental import EventsExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from ..control import LAWS
+from ..control.laws import SurfaceMeasurement
+from ..control.supervisor import Supervisor
+from ..control.tuning import pipe_impedance
+from ..core.parameters import ParameterError
+from ..wire import rig_topics
+from ..wire.qos import RELIABLE
+from .stopping import init_stoppable
+from .topics import rclpy_qos
+
+NODE_NAME = "drill_sim_controller"
+CONTROL_LAWS = tuple(n for n in LAWS if n != "kinematic")
+DEFAULT_TORQUE_LIMIT_NM = 60e3            # the base drive's rating; set to the rig's limits
+MAX_CATCH_UP = 100                        # law steps for one sample after a gap in the stamps
+# (input, measured topic, exact topic): the rig's names, from its table
+INPUTS = (("speed", "~/measured/top_drive/twist", "~/top_drive/twist"),
+          ("motor", "~/measured/top_drive/motor_wrench", "~/top_drive/motor_wrench"),
+          ("surface", "~/measured/top_drive/wrench", "~/top_drive/wrench"))
+TORQUE_COMMAND = "~/cmd/top_drive_torque"
+SPEED_COMMAND = "~/cmd/top_drive"
+
+
+def rig_topic(name: str) -> rig_topics.RigTopic:
+    """The rig's table entry ``name``; a rig without it is a start-up error naming it."""
+    try:
+        return rig_topics.topic(name)
+    except KeyError:
+        raise SystemExit(f"{NODE_NAME}: the rig offers no {name} in this build: expected the "
+                         "top drive's topics (msg_docs/node.md)") from None
+
+
+def law_gain_defaults(law: str, impedance: float, inertia: float) -> dict[str, float]:
+    """Every gain of ``law`` with its default as a number (50 Z, 5 J_TD, ±60 kN·m limits)."""
+    sig = inspect.signature(LAWS[law].__init__)
+    out = {}
+    for name in LAWS[law].GAINS:
+        value = sig.parameters[name].default
+        if name == "kp_nm_s_rad" and value is None:
+            value = 50.0 * impedance
+        elif name == "ki_nm_rad" and value is None:
+            value = 5.0 * inertia
+        elif name == "torque_min_nm":
+            value = -DEFAULT_TORQUE_LIMIT_NM
+        elif name == "torque_max_nm":
+            value = DEFAULT_TORQUE_LIMIT_NM
+        out[name] = float(value)
+    return out
+
+
+class ControllerNode(Node):
+    def __init__(self) -> None:
+        super().__init__(NODE_NAME)
+        p = self._declare_all()
+        self.rig = p["rig"]
+        try:
+            self.core = Supervisor(p["sample_period_s"], p["impedance_nm_s_rad"],
+                                   p["top_drive_inertia_kg_m2"], p["law"], self._gains(p["law"]),
+                                   enabled=p["enabled"],
+                                   speed_set_rad_s=p["initial_speed_setpoint_rad_s"])
+        except ParameterError as exc:
+            raise SystemExit(f"{NODE_NAME}: {exc}") from None
+        if p["inputs"] not in ("measured", "exact"):
+            raise SystemExit(f"{NODE_NAME}: inputs = {p['inputs']!r}: expected measured or exact")
+        use = 1 if p["inputs"] == "measured" else 2
+        self._pending: dict[int, list[float | None]] = {}
+        self._last: SurfaceMeasurement | None = None
+        self._index = {}
+        for i, entry in enumerate(INPUTS):
+            t = rig_topic(entry[use])
+            msg_type = TwistStamped if entry[0] == "speed" else WrenchStamped
+            self.create_subscription(msg_type, t.under(self.rig),
+                                     lambda msg, i=i: self._on_input(i, msg),
+                                     rclpy_qos(t.qos_for(RELIABLE).with_depth(100)))
+        cmd = rig_topic(TORQUE_COMMAND)
+        self.pub = self.create_publisher(WrenchStamped, cmd.under(self.rig),
+                                         rclpy_qos(cmd.qos_for(RELIABLE)))
+        setpoint = p["setpoint_topic"] or rig_topic(SPEED_COMMAND).under(self.rig)
+        self.create_subscription(TwistStamped, setpoint, self._on_setpoint,
+                                 rclpy_qos(rig_topic(SPEED_COMMAND).qos_for(RELIABLE)))
+        self.diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.create_timer(p["diagnostics_period_s"], self._diagnose)
+        self.manage_mode = p["manage_drive_mode"]
+        self.mode_client = self.create_client(SetParameters, f"{self.rig}/set_parameters")
+        self._mode_request = None
+        self.create_timer(0.1, self._send_mode)
+        self.msg = WrenchStamped()
+        self.msg.header.frame_id = rig_topics.FRAME_TOP_DRIVE
+        self.add_on_set_parameters_callback(self._on_parameters)
+        if self.manage_mode and self.core.enabled:      # on once the rig's drive is in torque
+            self.core.set_enabled(False)
+            self._request_mode("torque", lambda: self.core.set_enabled(True))
+
+    # ---- parameters ---------------------------------------------------------------------
+    def _declare_all(self) -> dict[str, object]:
+        d = ParameterDescriptor
+        plain = (
+            ("rig", rig_topics.NODE_NAME, "the rig node's name (e.g. /rig1/drill_sim)"),
+            ("law", "z_torque", f"one of {', '.join(CONTROL_LAWS)}"),
+            ("enabled", True, "false: publish nothing; true again: take over bumplessly"),
+            ("sample_period_s", 1e-3, "the law's h [s]: the rig's 1/rate_hz"),
+            ("impedance_nm_s_rad", pipe_impedance("base"),
+             "the pipe's Z = J_p sqrt(G rho) [N m s/rad]; default the base pipe's"),
+            ("top_drive_inertia_kg_m2", 2900.0, "J_TD [kg m^2], as the rig's"),
+            ("inputs", "measured", "measured (~/measured/...) or exact (~/top_drive/...)"),
+            ("setpoint_topic", "", "TwistStamped speed set-point [rad/s]; '': the rig's "
+                                   "~/cmd/top_drive"),
+            ("initial_speed_setpoint_rad_s", 2.0 * math.pi, "set-point until one arrives"),
+            ("manage_drive_mode", False, "set the rig's top_drive_mode: torque when enabled, "
+                                         "speed when disabled"),
+            ("diagnostics_period_s", 1.0, "/diagnostics period [s]"),
+        )
+        values = {}
+        for name, default, text in plain:
+            values[name] = self.declare_parameter(
+                name, default, d(description=text, read_only=name in (
+                    "rig", "sample_period_s", "inputs", "setpoint_topic",
+                    "diagnostics_period_s"))).value
+        z, j = float(values["impedance_nm_s_rad"]), float(values["top_drive_inertia_kg_m2"])
+        for law in CONTROL_LAWS:
+            for gain, default in law_gain_defaults(law, z, j).items():
+                self.declare_parameter(f"{law}.{gain}", default,
+                                       d(description=f"{law}: {gain} (msg_docs/control.md)"))
+        return values
+
+    def _gains(self, law: str, changed: dict[str, object] | None = None) -> dict[str, float]:
+        changed = changed or {}
+        return {g: float(changed.get(f"{law}.{g}", self.get_parameter(f"{law}.{g}").value))
+                for g in LAWS[law].GAINS}
+
+    def _on_parameters(self, params: list[Parameter]) -> SetParametersResult:
+        changed = {p.name: p.value for p in params}
+        law = str(changed.get("law", self.get_parameter("law").value))
+        try:
+            for name in ("impedance_nm_s_rad", "top_drive_inertia_kg_m2"):
+                if name in changed:
+                    raise ParameterError(f"{name} is fixed at start; restart to change it")
+            if law not in CONTROL_LAWS:
+                raise ParameterError(f"law = {law!r}: expected one of {', '.join(CONTROL_LAWS)}")
+            for name, value in changed.items():
+                if "." in name and not isinstance(value, float):
+                    raise ParameterError(f"{name} = {value!r}: expected a number (double)")
+            gains = self._gains(law, changed)
+            touches_law = "law" in changed or any(n.startswith(f"{law}.") for n in changed)
+            if touches_law:
+                self.core.build(law, gains)               # validate before anything changes
+        except ParameterError as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        if touches_law:
+            self.core.replace_law(law, gains)
+        if "enabled" in changed:
+            enabled = bool(changed["enabled"])
+            if not self.manage_mode or enabled == self.core.enabled:
+                self.core.set_enabled(enabled)
+            elif enabled:                    # on once the rig's drive takes torque commands
+                self._request_mode("torque", lambda: self.core.set_enabled(True))
+            else:
+                self.core.set_enabled(False)
+                self._request_mode("speed", None)
+        return SetParametersResult(successful=True)
+
+    def _request_mode(self, mode: str, then) -> None:
+        """Ask the rig to put its drive in ``mode`` (bumpless at the rig) as soon as its
+        parameter service is there; ``then()`` once it has."""
+        self._mode_request = (mode, then)
+        self._send_mode()
+
+    def _send_mode(self) -> None:
+        if self._mode_request is None or not self.mode_client.service_is_ready():
+            return
+        mode, then = self._mode_request
+        self._mode_request = None
+        value = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=mode)
+        future = self.mode_client.call_async(SetParameters.Request(
+            parameters=[ParameterMsg(name="top_drive_mode", value=value)]))
+
+        def done(f) -> None:
+            result = f.result()
+            if result is None or not result.results or not result.results[0].successful:
+                reason = "no answer" if result is None or not result.results \
+                    else result.results[0].reason
+                self.get_logger().error(f"the rig refused top_drive_mode = {mode}: {reason}")
+            elif then is not None:
+                then()
+        future.add_done_callback(done)
+
+    # ---- the loop -----------------------------------------------------------------------
+    def _on_setpoint(self, msg: TwistStamped) -> None:
+        speed = msg.twist.angular.z
+        if math.isfinite(speed):
+            self.core.set_speed(speed)
+        else:
+            self.get_logger().warn(f"set-point {speed!r} rad/s ignored: expected a finite speed")
+
+    def _on_input(self, i: int, msg) -> None:
+        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        value = msg.twist.angular.z if i == 0 else msg.wrench.torque.z
+        slot = self._pending.get(stamp)
+        if slot is None:
+            if len(self._pending) > 16:              # an input that never came: forget it
+                for old in sorted(self._pending)[:-8]:
+                    del self._pending[old]
+            slot = self._pending[stamp] = [None, None, None]
+        slot[i] = value
+        if None in slot:
+            return
+        del self._pending[stamp]
+        for old in [s for s in self._pending if s < stamp]:
+            del self._pending[old]
+        speed, motor, surface = slot
+        if not all(math.isfinite(v) for v in slot):
+            self.get_logger().warn(f"sample at {stamp * 1e-9:.3f} s skipped: non-finite input")
+            return
+        m = SurfaceMeasurement(stamp * 1e-9, speed, motor, surface)
+        if self._last is not None and m.time_s == self._last.time_s:
+            if self.core.last_output is not None and self.core.enabled:   # a tick published
+                self._publish(msg.header.stamp, self.core.last_output)    # again: same answer
+            return
+        # The law runs on sim time: when the rig skipped ticks (real time on a busy machine)
+        # the law is stepped once per period h of the gap on measurements interpolated
+        # linearly from the previous sample, so its filters, derivative and integral keep
+        # their time and see no jump (at most MAX_CATCH_UP steps).
+        last, self._last = self._last, m
+        periods = 1 if last is None else round((m.time_s - last.time_s) / self.core.h_s)
+        periods = min(max(periods, 1), MAX_CATCH_UP)
+        for k in range(1, periods):
+            f = k / periods
+            self.core.step(SurfaceMeasurement(*(a + f * (b - a) for a, b in zip(last, m,
+                                                                                strict=True))))
+        out = self.core.step(m)
+        if out is not None:
+            self._publish(msg.header.stamp, out)
+
+    def _publish(self, stamp, torque_nm: float) -> None:
+        self.msg.header.stamp = stamp
+        self.msg.wrench.torque.z = torque_nm
+        self.pub.publish(self.msg)
+
+    def _diagnose(self) -> None:
+        w = self.core.take_window()
+        level, text = DiagnosticStatus.OK, "controlling"
+        if not self.core.enabled:
+            text = "disabled"
+        elif w["samples"] == 0:
+            level, text = DiagnosticStatus.WARN, "no samples: the rig's inputs are not arriving"
+        elif w["saturation_fraction"] > 0.5 or w["windup_fraction"] > 0.5:
+            level, text = DiagnosticStatus.WARN, "output saturated"
+        law = self.core.law
+        values = {"law": law.name, "enabled": str(self.core.enabled),
+                  "samples": str(w["samples"]),
+                  "saturation_fraction": f"{w['saturation_fraction']:.4f}",
+                  "windup_fraction": f"{w['windup_fraction']:.4f}",
+                  "speed_setpoint_rad_s": f"{self.core.speed_set_rad_s:.6g}",
+                  "output_nm": "" if self.core.last_output is None
+                  else f"{self.core.last_output:.6g}"}
+        arr = DiagnosticArray()
+        arr.header.stamp = self.get_clock().now().to_msg()
+        arr.status = [DiagnosticStatus(level=level, name=f"{self.get_name()}: controller",
+                                       message=f"{law.name}: {text}", hardware_id="drill_sim",
+                                       values=[KeyValue(key=k, value=v)
+                                               for k, v in values.items()])]
+        self.diag.publish(arr)
+
+
+def main(args: list[str] | None = None) -> int:
+    stop = init_stoppable(args)
+    node = executor = None
+    try:
+        node = ControllerNode()
+        executor = EventsExecutor()
+        executor.add_node(node)
+        while not stop:
+            executor.spin_once(timeout_sec=0.1)
+    except SystemExit as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    except ExternalShutdownException:
+        pass
+    finally:
+        if executor is not None:
+            executor.shutdown()
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,215 @@
+"""``drill_sim control --ros``: one scenario scored through the nodes, in lockstep.
+
+The installed rig node (torque mode, ``publish_clock``, ``lockstep`` on the motor-torque
+command, started paused) and a controller — ``drill_sim_controller`` with the law's gains, or
+any command line that speaks the rig's topics — run in subprocesses in their own namespace; this
+process records the rig's exact outputs at every tick, releases the pause once everyone is
+connected and stops after the scenario's duration. The kinematic row has no controller: this
+process answers each tick with the speed set-point. Steady scenarios only (constant set-points,
+no switch-on): a set-point that changes would reach the controller in no defined order with the
+samples.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shlex
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..control.evaluation import LoopSettings, Scenario, law_top_drive
+from ..control.tuning import pipe_impedance
+from ..core import RPM, Preset
+from ..core.parameters import ParameterError
+
+NS = "/drill_sim_control"
+RIG = f"{NS}/drill_sim"
+SERIES = ("bit_speed_rad_s", "stuck", "surface_torque_nm", "motor_torque_nm", "bit_depth_m",
+          "top_drive_angle_rad", "wob_n", "top_drive_speed_rad_s")
+
+
+def executable(name: str) -> str:
+    beside = Path(sys.executable).parent / name
+    if not beside.exists():
+        raise OSError(f"{name} is not installed beside {sys.executable}")
+    return str(beside)
+
+
+def check_steady(scenario: Scenario) -> tuple[float, float]:
+    """(speed set-point [rad/s], W0 [N]) of a steady scenario; ParameterError otherwise."""
+    if len(scenario.rpm_points) != 1 or len(scenario.wob_kn_points) != 1 \
+            or scenario.switch_on_s > 0.0:
+        raise ParameterError(f"scenario {scenario.name!r}: --ros runs steady scenarios only "
+                             "(one rpm and one WOB, no switch-on): expected --rpm and --wob-kn")
+    return scenario.rpm_points[0][1] * RPM, 1e3 * scenario.wob_kn_points[0][1]
+
+
+def rig_command(preset: Preset, scenario: Scenario, settings: LoopSettings) -> list[str]:
+    speed, wob = check_steady(scenario)
+    if scenario.start_rpm is not None:            # a steady start away from the set-point
+        speed = scenario.start_rpm * RPM
+    drive = law_top_drive(preset, settings.law, settings.top_drive)
+    topic = "cmd/top_drive" if settings.law == "kinematic" else "cmd/top_drive_torque"
+    params = {"preset": preset.name, "publish_clock": "true", "lockstep": "true",
+              "lockstep_topics": f"[{topic}]", "start_paused": "true",
+              "lockstep_timeout_s": "3600.0",
+              "rate_hz": repr(1.0 / settings.sample_period_s),
+              "top_drive_mode": drive.top_drive_mode,
+              "top_drive_inertia_kg_m2": repr(drive.top_drive_inertia_kg_m2),
+              "motor_torque_max_nm": repr(drive.motor_torque_max_nm),
+              "motor_torque_min_nm": repr(drive.motor_torque_min_nm),
+              "initial_state": "steady", "initial_top_drive_speed_rad_s": repr(speed),
+              "initial_weight_on_bit_n": repr(wob), "sensor_profile": settings.sensor_profile,
+              "sensor_seed": str(settings.sensor_seed), "string_model": settings.string_model}
+    cmd = [executable("drill_sim_node"), "--ros-args", "-r", f"__ns:={NS}"]
+    for k, v in params.items():
+        cmd += ["-p", f"{k}:={v}"]
+    return cmd
+
+
+def controller_command(preset: Preset, scenario: Scenario, settings: LoopSettings,
+                       user_command: str | None) -> list[str] | None:
+    """Our controller with the law's gains, the user's command (namespaced with the rig), or
+    None for the kinematic row."""
+    if user_command:
+        return [*shlex.split(user_command), "--ros-args", "-r", f"__ns:={NS}"]
+    if settings.law == "kinematic":
+        return None
+    speed, _ = check_steady(scenario)
+    drive = law_top_drive(preset, settings.law, settings.top_drive)
+    params = {"rig": RIG, "law": settings.law, "inputs": "measured",
+              "sample_period_s": repr(settings.sample_period_s),
+              "impedance_nm_s_rad": repr(pipe_impedance(preset)),
+              "top_drive_inertia_kg_m2": repr(drive.top_drive_inertia_kg_m2),
+              "initial_speed_setpoint_rad_s": repr(speed),
+              "setpoint_topic": f"{NS}/speed_setpoint_unused",
+              f"{settings.law}.torque_min_nm": repr(drive.motor_torque_min_nm),
+              f"{settings.law}.torque_max_nm": repr(drive.motor_torque_max_nm)}
+    params.update({f"{settings.law}.{k}": repr(float(v)) for k, v in settings.gains.items()})
+    cmd = [executable("drill_sim_controller"), "--ros-args", "-r", f"__ns:={NS}"]
+    for k, v in params.items():
+        cmd += ["-p", f"{k}:={v}"]
+    return cmd
+
+
+def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
+            user_command: str | None = None, timeout_s: float = 3600.0,
+            progress=None) -> dict[str, np.ndarray]:
+    """The rig's series at every tick up to the scenario's duration (keys: ``time_s`` and
+    SERIES), through the nodes in lockstep."""
+    import rclpy
+    from geometry_msgs.msg import TwistStamped, WrenchStamped
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import UInt8
+    from std_srvs.srv import SetBool
+
+    speed, _ = check_steady(scenario)
+    n = math.floor(scenario.duration_s / settings.sample_period_s + 1e-9) + 1
+    data: dict[str, dict[int, float]] = {k: {} for k in SERIES}
+    owns = not rclpy.ok()
+    if owns:
+        rclpy.init()
+    node = rclpy.create_node("drill_sim_control_harness")
+    procs: list[subprocess.Popen] = []
+
+    def stamp(m) -> int:
+        return m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
+
+    def put(key: str, m, value: float) -> None:
+        data[key][stamp(m)] = value
+
+    speed_pub = node.create_publisher(TwistStamped, f"{RIG}/cmd/top_drive", 10)
+    answer = TwistStamped()
+    answer.header.frame_id = "top_drive"
+    answer.twist.angular.z = speed
+
+    def on_bit(m) -> None:
+        put("bit_speed_rad_s", m, m.twist.angular.z)
+        if settings.law == "kinematic":            # the kinematic row: answer the tick here
+            answer.header.stamp = m.header.stamp
+            speed_pub.publish(answer)
+
+    depth = 10000
+    node.create_subscription(TwistStamped, f"{RIG}/bit/twist", on_bit, depth)
+    node.create_subscription(UInt8, f"{RIG}/bit/regime", lambda m: data["stuck"].__setitem__(
+        len(data["stuck"]), float(m.data == 1)), depth)
+    node.create_subscription(WrenchStamped, f"{RIG}/top_drive/wrench", lambda m: put(
+        "surface_torque_nm", m, m.wrench.torque.z), depth)
+    node.create_subscription(WrenchStamped, f"{RIG}/top_drive/motor_wrench", lambda m: put(
+        "motor_torque_nm", m, m.wrench.torque.z), depth)
+    node.create_subscription(WrenchStamped, f"{RIG}/bit/wrench", lambda m: put(
+        "wob_n", m, m.wrench.force.z), depth)
+
+    def on_joints(m) -> None:
+        put("bit_depth_m", m, m.position[1])
+        put("top_drive_angle_rad", m, m.position[0])
+        put("top_drive_speed_rad_s", m, m.velocity[0])
+    node.create_subscription(JointState, f"{RIG}/joint_states", on_joints, depth)
+    env = dict(os.environ)
+    try:
+        procs.append(subprocess.Popen(rig_command(preset, scenario, settings), env=env,
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                      text=True))
+        ctl = controller_command(preset, scenario, settings, user_command)
+        if ctl is not None:
+            procs.append(subprocess.Popen(ctl, env=env, stdout=subprocess.DEVNULL))
+        cmd_topic = f"{RIG}/cmd/top_drive" if ctl is None else f"{RIG}/cmd/top_drive_torque"
+        pause = node.create_client(SetBool, f"{RIG}/pause")
+        end = time.monotonic() + 60.0
+        while not (pause.service_is_ready() and node.count_publishers(cmd_topic) > 0
+                   and node.count_publishers(f"{RIG}/joint_states") > 0
+                   and (ctl is None or node.count_subscribers(
+                       f"{RIG}/measured/top_drive/motor_wrench") > 0)):
+            _check_alive(procs)
+            if time.monotonic() > end:
+                raise OSError("the rig and the controller did not connect within 60 s")
+            rclpy.spin_once(node, timeout_sec=0.05)
+        time.sleep(0.5)                         # let the subscriptions match both ways
+        future = pause.call_async(SetBool.Request(data=False))
+        end = time.monotonic() + timeout_s
+        last = -1
+        while min(len(v) for v in data.values()) < n:
+            rclpy.spin_once(node, timeout_sec=0.05)
+            _check_alive(procs)
+            if time.monotonic() > end:
+                raise OSError(f"lockstep run stalled: {min(len(v) for v in data.values())} of "
+                              f"{n} ticks after {timeout_s:g} s")
+            got = len(data["bit_speed_rad_s"])
+            if progress is not None and got != last:
+                last = got
+                progress(min(got / n, 1.0))
+        del future
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.send_signal(signal.SIGINT)
+        for p in procs:
+            try:
+                p.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                p.kill()
+        node.destroy_node()
+        if owns:
+            rclpy.try_shutdown()
+    stamps = sorted(data["bit_speed_rad_s"])[:n]
+    out = {"time_s": np.array(stamps, dtype=float) * 1e-9}
+    for k in SERIES:
+        if k == "stuck":
+            out[k] = np.array([data[k][i] for i in range(n)])
+        else:
+            out[k] = np.array([data[k][s] for s in stamps])
+    return out
+
+
+def _check_alive(procs: list[subprocess.Popen]) -> None:
+    for p in procs:
+        if p.poll() is not None:
+            err = p.stderr.read() if p.stderr is not None else ""
+            raise OSError(f"{Path(p.args[0]).name} stopped with status {p.returncode}"
+                          + (f": {err.strip().splitlines()[-1]}" if err.strip() else ""))

@@ -1,0 +1,98 @@
+"""``drill_sim control`` as a user types it: one JSON object with a row per law, the table it
+writes, its figure, and one-line refusals of bad options."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+
+import pytest
+from conftest import installed
+
+from drill_sim.cli.main import main
+from drill_sim.control.evaluation import LoopSettings, Scenario, run_loop
+from drill_sim.control.reference import reference_gains
+from drill_sim.core import load_preset
+
+POINT = ["control", "--preset", "base", "--rpm", "60", "--wob-kn", "100", "--duration", "16"]
+
+
+def test_json_is_one_object_with_a_row_per_law_as_the_loop_computes_it():
+    """The installed command, as the README shows it; its z_torque row is what the offline
+    loop gives for the same scenario and reference gains (computed here, in this process)."""
+    done = subprocess.run([installed("drill_sim"), *POINT, "--laws",
+                           "kinematic,stiff_pi,z_torque", "--json"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    doc = json.loads(done.stdout)
+    rows = {r["name"]: r for r in doc["rows"]}
+    assert list(rows) == ["kinematic", "stiff_pi", "z_torque"]
+    for row in rows.values():
+        assert {"ssi", "stick_fraction", "mean_rop"} <= set(row)
+    assert doc["units"]["mean_rop"] == "m/h"
+    preset = load_preset("base")
+    expected = run_loop(preset, Scenario.steady(60, 100, duration_s=16, window_start_s=8),
+                        LoopSettings(law="z_torque",
+                                     gains=reference_gains("z_torque", preset, 2900.0)))
+    assert rows["z_torque"]["ssi"] == expected.ssi
+    assert rows["z_torque"]["mean_rop"] == expected.mean_rop_m_h
+    assert rows["kinematic"]["saturation_fraction"] is None        # strict JSON: no NaN
+
+
+def test_table_csv_and_plot_are_written(tmp_path, capsys):
+    out, fig = tmp_path / "t.csv", tmp_path / "t.png"
+    assert main([*POINT, "--laws", "stiff_pi", "--motor-torque-min-knm", "0", "--out", str(out),
+                 "--plot", str(fig)]) == 0
+    text = capsys.readouterr().out
+    assert "stiff_pi" in text and "motor torque 0..60 kN m" in text
+    with open(out, newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    assert rows[0]["name"] == "stiff_pi"
+    assert "mean_rop_m_h [m/h]" in rows[0]
+    assert fig.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["--laws", "pid"], "--laws"),
+    (["--gain", "z_torque.alpha=nan"], "alpha"),
+    (["--gain", "z_torque.beta=1"], "no gain 'beta'"),
+    (["--gain", "alpha=1"], "LAW.NAME=VALUE"),
+    (["--sample-period", "0"], "--sample-period"),
+    (["--motor-torque-min-knm", "5"], "--motor-torque-min-knm"),
+    (["--window-start", "20"], "--window-start"),
+    (["--out", "x.txt"], ".csv or .json"),
+])
+def test_bad_options_are_one_line(argv, words, capsys):
+    assert main([*POINT, *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert words in err
+
+
+def test_rpm_without_wob_is_refused(capsys):
+    assert main(["control", "--rpm", "60"]) == 2
+    assert "--wob-kn" in capsys.readouterr().err
+
+
+def test_unknown_scenario_set_is_refused(capsys):
+    assert main(["control", "--scenarios", "grid,nope"]) == 2
+    assert "nope" in capsys.readouterr().err
+
+
+def test_main_job_switches_the_scenarios_controller_on_and_compares(tmp_path):
+    """A scenario with a controller section: the rig starts on its own speed loop, the driver
+    switches drill_sim_controller on at on_at_s, the summary compares before and after."""
+    from rosutil import isolate
+    isolate()
+    scenario = tmp_path / "on.yaml"
+    scenario.write_text("description: steady, then Z-Torque\ninitial_state: steady\n"
+                        "duration_s: 7.0\npoints:\n  - {at_s: 0.0, rpm: 60.0, wob_kn: 100.0}\n"
+                        "controller: {law: z_torque, on_at_s: 2.5}\n")
+    proc = subprocess.run([installed("drill_sim"), "run", "--scenario", str(scenario),
+                           "--no-record", "--plot", str(tmp_path / "on.png")],
+                          capture_output=True, text=True, timeout=180, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "controller z_torque switched on at" in proc.stderr + proc.stdout   # the driver
+    assert "controller z_torque switched on at 2.5 s: SSI" in proc.stdout       # the summary
+    assert "stick-slip: no stick-slip before the switch" in proc.stdout

@@ -1,0 +1,147 @@
+"""The offline closed loop (drill_sim.control.evaluation) against independent computations and the
+issue's section-4 claims on base at 60 rpm / 100 kN, lumped string, J_TD 2900 kg·m², ±60 kN·m.
+
+Runs are 40 s (stick-slip is established from ~10 s on with the 1e-3 start perturbation); the
+metrics window is the last 20 s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from drill_sim.control.evaluation import LoopSettings, Scenario, run_loop
+from drill_sim.control.reference import reference_gains
+from drill_sim.core import RPM, ParameterError, Rig, load_preset
+
+J_TD = 2900.0
+SCENARIO = Scenario.steady(60.0, 100.0, duration_s=40.0, window_start_s=20.0)
+
+
+@pytest.fixture(scope="module")
+def preset():
+    return load_preset("base")
+
+
+@pytest.fixture(scope="module")
+def table(preset):
+    """Each law with its reference tuning, as ``drill_sim control`` runs it."""
+    return {law: run_loop(preset, SCENARIO, LoopSettings(
+                law=law, gains=reference_gains(law, preset, J_TD)))
+            for law in ("kinematic", "stiff_pi", "soft_speed", "z_torque")}
+
+
+def test_kinematic_loop_is_the_rig_left_alone(preset):
+    """The loop's sampling and hold change nothing when the law repeats the command: its
+    metrics equal those of a Rig advanced straight through the same window."""
+    scenario = Scenario.steady(60.0, 100.0, duration_s=12.0, window_start_s=6.0)
+    looped = run_loop(preset, scenario, LoopSettings(law="kinematic"))
+    rig = Rig(preset.rig, 1e-4)           # the node's step at 1 kHz: 1 ms / 10
+    rig.start_steady(60 * RPM, preset.rig.submerged_weight_n - 100e3, perturbation=1e-3)
+    rig.advance_to(6.0)
+    rig.reset_metrics_window()
+    rig.advance_to(12.0)
+    m = rig.metrics()
+    assert looped.ssi == pytest.approx(m["ssi"], rel=1e-12)   # sums taken in other chunks
+    assert looped.stick_fraction == pytest.approx(m["stick_fraction"], rel=1e-12)
+    assert looped.mean_rop_m_h == pytest.approx(m["mean_rop_m_s"] * 3600.0, rel=1e-12)
+
+
+def test_kinematic_and_stiff_drive_stay_in_stick_slip(table):
+    for law in ("kinematic", "stiff_pi"):
+        r = table[law]
+        assert 0.35 < r.stick_fraction < 0.5, law
+        assert 1.3 < r.ssi < 1.8, law
+        assert r.min_bit_speed_rpm == 0.0
+
+
+def test_z_torque_removes_sticking_and_raises_rop(table):
+    r, stiff = table["z_torque"], table["kinematic"]
+    assert r.stick_fraction == 0.0
+    assert r.ssi <= 0.4
+    assert r.mean_rop_m_h > 1.1 * stiff.mean_rop_m_h
+    assert r.surface_torque_rms_nm < 0.5 * stiff.surface_torque_rms_nm
+    assert r.saturation_fraction == 0.0
+
+
+def test_z_torque_at_the_published_alpha_keeps_stick_slip_from_growing(preset):
+    """α = 0.25 (Dwars, Simulator4nDOF) with the stiff-at-the-mode K_p, from the start."""
+    gains = {**reference_gains("z_torque", preset, J_TD), "alpha": 0.25}
+    r = run_loop(preset, SCENARIO, LoopSettings(law="z_torque", gains=gains))
+    assert r.stick_fraction == 0.0
+    assert 0.2 < r.ssi <= 0.4
+
+
+def test_z_torque_without_its_torque_feedback_is_the_stiff_drive(preset):
+    """α = 0 leaves the same stiff PI without the impedance match: stick-slip stays, so the
+    torque feedback is what clears it."""
+    gains = {**reference_gains("z_torque", preset, J_TD), "alpha": 0.0}
+    r = run_loop(preset, SCENARIO, LoopSettings(law="z_torque", gains=gains))
+    assert r.stick_fraction > 0.2
+
+
+def test_soft_speed_with_inertia_compensation_reduces_ssi(table):
+    assert table["soft_speed"].ssi < 0.8 * table["stiff_pi"].ssi
+
+
+def test_a_drive_that_cannot_brake_over_speeds_the_bit(preset):
+    """Z-Torque switched on in stick-slip: a four-quadrant drive clears it at the set-point; one
+    clamped at 0 N·m cannot take energy out of the slip phases, saturates at 0 and the bit
+    runs above the set-point on average."""
+    scenario = Scenario.steady(60.0, 100.0, duration_s=45.0, window_start_s=30.0,
+                               switch_on_s=15.0)
+    gains = reference_gains("z_torque", preset, J_TD)
+    braking = run_loop(preset, scenario, LoopSettings(law="z_torque", gains=gains))
+    no_brake = run_loop(preset, scenario, LoopSettings(
+        law="z_torque", gains=gains,
+        top_drive=replace(preset.top_drive, motor_torque_min_nm=0.0)))
+    assert braking.stick_fraction == 0.0
+    assert braking.mean_bit_speed_rpm == pytest.approx(60.0, rel=0.02)
+    assert no_brake.saturation_fraction > 0.2
+    assert no_brake.mean_bit_speed_rpm > 1.1 * 60.0
+
+
+def test_mse_of_steady_drilling_is_teale_on_the_steady_state(preset):
+    """At a stable point (250 rpm, 100 kN) the loop's MSE (work into the string at the top per
+    volume drilled) must be Teale's on the steady solution, MSE = W/A + 2π T/(A d) with d the
+    depth of cut per revolution, read from a Rig started on it (no loop, no window)."""
+    scenario = Scenario.steady(250.0, 100.0, duration_s=8.0, window_start_s=4.0)
+    r = run_loop(preset, scenario, LoopSettings(law="stiff_pi", perturbation=0.0))
+    rig = Rig(preset.rig)
+    rig.start_steady(250 * RPM, preset.rig.submerged_weight_n - 100e3)
+    s = rig.sample()
+    area = math.pi * preset.rig.bit_radius_m ** 2
+    teale = s.wob_n / area + 2 * math.pi * s.tob_nm / (area * s.depth_of_cut_m)
+    assert r.stick_fraction == 0.0
+    assert r.mse_pa == pytest.approx(teale, rel=1e-3)
+    assert r.surface_torque_p2p_nm < 1e-3 * r.mean_surface_torque_nm
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"duration_s": math.nan}, "duration_s"),
+    ({"window_start_s": 50.0}, "window_start_s"),
+    ({"rpm_points": ((0.0, math.inf),)}, "rpm_points"),
+    ({"wob_kn_points": ((5.0, 100.0), (1.0, 80.0))}, "must not decrease"),
+])
+def test_bad_scenarios_are_refused_by_name(kwargs, words):
+    base = {"name": "x", "rpm_points": ((0.0, 60.0),), "wob_kn_points": ((0.0, 100.0),),
+            "duration_s": 40.0, "window_start_s": 20.0}
+    with pytest.raises(ParameterError, match=words):
+        Scenario(**{**base, **kwargs})
+
+
+def test_weight_above_the_string_weight_is_refused(preset):
+    with pytest.raises(ParameterError, match="wob_kn"):
+        run_loop(preset, Scenario.steady(60.0, 1e4, duration_s=2.0, window_start_s=1.0),
+                 LoopSettings(law="stiff_pi"))
+
+
+def test_series_are_sampled_at_h(preset):
+    r = run_loop(preset, Scenario.steady(60.0, 100.0, duration_s=1.0, window_start_s=0.5),
+                 LoopSettings(law="z_torque", sample_period_s=0.01))
+    t = r.series["time_s"]
+    assert len(t) == 101
+    assert np.all(np.abs(t - np.arange(101) * 0.01) <= r.series["time_s"][1] - 0.01 + 2e-4)

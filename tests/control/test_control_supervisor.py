@@ -1,0 +1,64 @@
+"""The law in service (drill_sim.control.supervisor): enable, switch and re-tune without a bump,
+bad gains refused with the old law kept, saturation and wind-up counted."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from drill_sim.control import ParameterError, SurfaceMeasurement
+from drill_sim.control.supervisor import Supervisor
+
+H, Z, J = 1e-3, 302.4, 2900.0
+SPEED = 2 * math.pi
+
+
+def m(t: float, speed: float = SPEED, motor: float = 5000.0) -> SurfaceMeasurement:
+    return SurfaceMeasurement(t, speed, motor, motor)
+
+
+def test_enabling_takes_over_from_the_torque_the_drive_applies():
+    s = Supervisor(H, Z, J, "z_torque", enabled=False, speed_set_rad_s=SPEED)
+    assert s.step(m(0.0)) is None
+    s.set_enabled(True)
+    assert s.step(m(0.001, speed=SPEED - 0.01, motor=4321.0)) == pytest.approx(4321.0)
+    second = s.step(m(0.002, speed=SPEED - 0.01, motor=4321.0))
+    assert abs(second - 4321.0) < 50.0 * Z * 0.02          # a small, not a step, change
+
+
+def test_a_new_law_or_new_gains_continue_from_the_last_output():
+    s = Supervisor(H, Z, J, "stiff_pi", speed_set_rad_s=SPEED)
+    out = s.step(m(0.0, motor=5000.0))
+    for k in range(1, 50):
+        out = s.step(m(k * H, speed=SPEED - 0.05))
+    s.replace_law("soft_speed", {"tuning_frequency_hz": 0.76})
+    assert s.step(m(0.05, speed=SPEED - 0.05)) == pytest.approx(out)
+    s.replace_law("soft_speed", {"tuning_frequency_hz": 0.5, "kp_over_impedance": 2.0})
+    assert s.step(m(0.051, speed=SPEED - 0.05)) == pytest.approx(s.last_output)
+
+
+def test_bad_gains_are_refused_and_the_law_kept():
+    s = Supervisor(H, Z, J, "z_torque", speed_set_rad_s=SPEED)
+    law = s.law
+    with pytest.raises(ParameterError, match="alpha"):
+        s.replace_law("z_torque", {"alpha": math.nan})
+    with pytest.raises(ParameterError, match="highpass_hz"):
+        s.replace_law("z_torque", {"highpass_hz": 5.0, "torque_lowpass_hz": 2.5})
+    with pytest.raises(ParameterError, match="kinematic"):
+        s.replace_law("kinematic", {})
+    assert s.law is law
+
+
+def test_saturation_and_windup_are_counted():
+    s = Supervisor(H, Z, J, "stiff_pi", {"torque_min_nm": -1000.0, "torque_max_nm": 1000.0},
+                   speed_set_rad_s=SPEED)
+    for k in range(1000):            # 1 rad/s short of the set-point for a second
+        s.step(m(k * H, speed=SPEED - 1.0, motor=1000.0))
+    w = s.take_window()
+    assert w["samples"] == 1000
+    assert w["saturation_fraction"] == 1.0       # 50 Z * 1 rad/s = 15 kN·m > 1 kN·m
+    assert w["windup_fraction"] > 0.9            # the integral held on a limit by the clamp
+    assert s.take_window()["samples"] == 0
+    # nothing wound up: the output leaves the limit on the first sample the error reverses
+    assert s.step(m(1.0, speed=SPEED + 0.01, motor=1000.0)) < 1000.0

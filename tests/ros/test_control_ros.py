@@ -1,0 +1,32 @@
+"""``drill_sim control --ros``: the rig node and drill_sim_controller in lockstep, scored on the
+rig's samples, give the offline loop's numbers (the same law, gains, sample instants and start)
+to round-off; so a controller scored through the nodes is scored as the offline table is."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from drill_sim.control.evaluation import LoopSettings, Scenario, run_loop, sample_metrics
+from drill_sim.control.reference import reference_gains
+from drill_sim.core import load_preset
+from drill_sim.ros.evaluation import run_ros
+
+
+def test_ros_lockstep_scores_equal_the_offline_scores(ros):
+    preset = load_preset("base")
+    settings = LoopSettings(law="z_torque", gains=reference_gains("z_torque", preset, 2900.0),
+                            perturbation=0.0)
+    scenario = Scenario("step", ((0.0, 61.0),), ((0.0, 100.0),), duration_s=1.2,
+                        window_start_s=0.2, start_rpm=60.0)
+    drive = preset.top_drive                                     # its limits: ±60 kN·m
+    through_nodes = run_ros(preset, scenario, settings)
+    offline = run_loop(preset, scenario, settings)
+    assert np.allclose(through_nodes["time_s"], offline.series["time_s"], rtol=0, atol=1e-12)
+    a = sample_metrics(preset, through_nodes, 0.2, drive, law="z_torque", scenario="step")
+    b = sample_metrics(preset, offline.series, 0.2, drive, law="z_torque", scenario="step")
+    assert b.surface_torque_p2p_nm > 0.5 and b.ssi > 1e-3        # a real transient
+    for key in ("ssi", "mean_rop_m_h", "surface_torque_p2p_nm", "surface_torque_rms_nm",
+                "mse_pa", "max_bit_speed_rpm"):
+        assert getattr(a, key) == pytest.approx(getattr(b, key), rel=1e-9), key
+    assert a.stick_fraction == b.stick_fraction

@@ -1,0 +1,66 @@
+"""The offline loop and the nodes in lockstep are the same loop: the installed rig node (torque
+mode, lockstep on its motor-torque command) and drill_sim_controller give, sample by sample, the
+bit speed and motor torque ``drill_sim.control.evaluation.run_loop`` computes in-process for the
+same law, gains, sample instants and start (steady at 60 rpm, set-point 61 rpm: a transient
+that the law must work through, its integral off the limits)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from geometry_msgs.msg import TwistStamped, WrenchStamped
+from rosutil import NodeProcess, call_service, wait_for
+from std_srvs.srv import SetBool
+
+from drill_sim.control.evaluation import LoopSettings, Scenario, run_loop
+from drill_sim.control.reference import reference_gains
+from drill_sim.core import RPM, load_preset
+
+NS = "/ctlock"
+RIG = f"{NS}/drill_sim"
+DURATION_S = 1.5
+
+
+def test_lockstep_nodes_reproduce_the_offline_loop(ros):
+    preset = load_preset("base")
+    gains = reference_gains("z_torque", preset, 2900.0)
+    bit: dict[int, float] = {}
+    motor: dict[int, float] = {}
+
+    def stamp(m) -> int:
+        return m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
+
+    ros.create_subscription(TwistStamped, f"{RIG}/bit/twist",
+                            lambda m: bit.__setitem__(stamp(m), m.twist.angular.z), 10000)
+    ros.create_subscription(WrenchStamped, f"{RIG}/top_drive/motor_wrench",
+                            lambda m: motor.__setitem__(stamp(m), m.wrench.torque.z), 10000)
+    controller = ["-p", f"rig:={RIG}", "-p", "inputs:=exact",
+                  "-p", f"initial_speed_setpoint_rad_s:={61 * RPM!r}",
+                  *(a for k, v in gains.items() for a in ("-p", f"z_torque.{k}:={float(v)!r}"))]
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={NS}",
+                     "-p", "top_drive_mode:=torque", "-p", "publish_clock:=true",
+                     "-p", "lockstep:=true", "-p", "lockstep_topics:=[cmd/top_drive_torque]",
+                     "-p", "lockstep_timeout_s:=0.5", "-p", "start_paused:=true"), \
+         NodeProcess("drill_sim_controller", "--ros-args", "-r", f"__ns:={NS}", *controller):
+        wait_for(lambda: ros.count_publishers(f"{RIG}/cmd/top_drive_torque") > 0
+                 and ros.count_subscribers(f"{RIG}/top_drive/motor_wrench") >= 2
+                 and ros.count_publishers(f"{RIG}/bit/twist") > 0, ros, 60.0,
+                 "the rig and the controller connected")
+        assert call_service(ros, SetBool, f"{RIG}/pause", SetBool.Request(data=False)).success
+        wait_for(lambda: bit and motor and min(max(bit), max(motor)) * 1e-9 >= DURATION_S,
+                 ros, 240.0,
+                 f"{DURATION_S} s of lockstep ticks")
+    offline = run_loop(preset, Scenario("step", ((0.0, 61.0),), ((0.0, 100.0),),
+                                        duration_s=DURATION_S, window_start_s=0.5,
+                                        start_rpm=60.0),
+                       LoopSettings(law="z_torque", gains=gains, perturbation=0.0))
+    n = len(offline.series["time_s"])
+    stamps = sorted(bit)[:n]
+    assert len(stamps) == n and stamps == [k * 1_000_000 for k in range(n)]   # every tick
+    ros_bit = np.array([bit[s] for s in stamps])
+    ros_motor = np.array([motor[s] for s in stamps])
+    off_bit, off_motor = offline.series["bit_speed_rad_s"], offline.series["motor_torque_nm"]
+    assert np.ptp(off_motor) > 30.0 and np.ptp(off_bit) > 5e-3      # the transient is real
+    assert np.allclose(ros_bit, off_bit, rtol=0.0, atol=1e-9 * math.tau)
+    assert np.allclose(ros_motor, off_motor, rtol=1e-12, atol=1e-6)
