@@ -42,7 +42,9 @@ def executable(name: str) -> str:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--scenario", default="tag_bottom", help="shipped scenario or YAML file")
+    parser.add_argument("--scenario", default="controller_on",
+                        help="shipped scenario or YAML file (default controller_on: the driller "
+                             "drills into stick-slip, Z-Torque is switched on and clears it)")
     parser.add_argument("--preset", default="base", help="rig preset or preset YAML file")
     parser.add_argument("--duration", type=number, default=None,
                         help=f"wall seconds to run, up to {MAX_DURATION_S:g}; default: the "
