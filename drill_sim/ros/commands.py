@@ -62,16 +62,25 @@ class CommandInbox:
         self.received = self.lost = self.undecodable = 0
         self._last_sequence: dict[str, int] = {}
         self._context = node.context.handle
+        self._watched = [h for _, h, _ in self._subs]
         self._wait_set = _rclpy.WaitSet(len(self._subs), 0, 0, 0, 0, 0, self._context)
 
+    def wait_on(self, names: tuple[str, ...] | None) -> None:
+        """Let ``wait`` wake only for these topics (table names; None: every command topic).
+        A wait costs ~3 us of CPU more per topic it watches (Fast DDS attaches and detaches a
+        condition for each), and in lockstep only the lockstep topics release a tick."""
+        self._watched = [h for t, h, _ in self._subs if names is None or t.name in names]
+        self._wait_set.destroy_when_not_in_use()
+        self._wait_set = _rclpy.WaitSet(len(self._watched), 0, 0, 0, 0, 0, self._context)
+
     def wait(self, timeout_s: float) -> None:
-        """Block until a command has arrived on any topic, or ``timeout_s`` [s] passed:
-        the middleware wakes the thread, so a lockstep wait costs no CPU and no polling
-        delay."""
+        """Block until a command has arrived on a watched topic (``wait_on``), or
+        ``timeout_s`` [s] passed: the middleware wakes the thread, so a lockstep wait costs
+        no CPU and no polling delay."""
         ws = self._wait_set
         with self._context:
             ws.clear_entities()
-            for _, handle, _ in self._subs:
+            for handle in self._watched:
                 ws.add_subscription(handle)
             ws.wait(max(0, int(timeout_s * 1e9)))
 
@@ -108,4 +117,4 @@ class CommandInbox:
         self._wait_set.destroy_when_not_in_use()
         for _, handle, _ in self._subs:
             handle.destroy_when_not_in_use()
-        self._subs = []
+        self._subs, self._watched = [], []

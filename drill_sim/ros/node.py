@@ -185,8 +185,15 @@ class RigNode(Node):
     def run_lockstep(self, executor: EventsExecutor, stop) -> None:
         """Publish a tick, wait for a command stamped with its time on every lockstep topic
         (blocked in the middleware: no CPU spent), advance one tick, and so on; services,
-        parameters and diagnostics are served every LOCKSTEP_SERVE_PERIOD_S and while paused."""
+        parameters and diagnostics are served every LOCKSTEP_SERVE_PERIOD_S and while paused.
+
+        Per tick one wait, then one take (right after publishing nothing can have answered
+        yet), and the wait watches only the lockstep topics: with Fast DDS a wait costs ~25 us
+        of CPU plus ~3 us per topic watched, and only lockstep topics release a tick. Other
+        commands are still taken with each tick's; while the rig waits they are taken at the
+        latest every LOCKSTEP_SERVE_PERIOD_S."""
         ls = self.lockstep
+        self.commands.wait_on(ls.topics)
         next_serve = 0.0
         while not stop:
             if self.paused:
@@ -203,7 +210,7 @@ class RigNode(Node):
                 if self.advance(1):
                     self.pacer.advanced(1)
                     self.publish_sample(self.rig.sample())
-            else:
+            if not ls.complete and not self.paused:
                 if ls.overdue(now):
                     self._lockstep_overdue(now)
                 self.commands.wait(min(max(next_serve - now, 0.0), ls.until_overdue(now)))
