@@ -73,10 +73,11 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--record", action="store_true", help="the node records its bag too")
     parser.add_argument("--controller", choices=tuple(CONTROLLERS), default="lean")
-    parser.add_argument("--executor", choices=("events", "single", "waitset"), default="events",
-                        help="rclpy: its executor (events, single); lean: its wait (events, "
-                        "waitset)")
+    parser.add_argument("--executor", choices=("events", "single", "waitset"), default=None,
+                        help="rclpy: its executor (events, default; single); lean: its wait "
+                        "(waitset, default; events)")
     args = parser.parse_args()
+    args.executor = args.executor or ("waitset" if args.controller == "lean" else "events")
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 230)))
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     print(f"lockstep, 1000 Hz, one PI controller in another process, {args.ticks} ticks"

@@ -17,7 +17,7 @@ of the same topic replaced within the same tick.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
@@ -29,9 +29,9 @@ from ..wire.rig_topics import RigTopic
 from .topics import message_class, rclpy_qos
 
 
-@dataclass(frozen=True)
-class Command:
-    """One command message as taken: its topic, its bytes and what they hold."""
+class Command(NamedTuple):
+    """One command message as taken: its topic, its bytes and what they hold. A named tuple:
+    in lockstep one is built every tick, ~1 us cheaper than a frozen dataclass."""
 
     topic: RigTopic
     data: bytes                      # the CDR bytes as received

@@ -66,6 +66,7 @@ class RigNode(Node):
         self._enc = RigEncoders(self.with_clock)
         self._outputs = [self._publisher(t) for t in self._enc.topics]
         self._live = [True] * len(self._outputs)  # back to back: outputs with a subscriber
+        self._live_at = list(range(len(self._outputs)))   # ... their places
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
         self.commands = CommandInbox(self, self.p["qos_reliability"])
         self.superseded = 0                      # commands replaced within their tick
@@ -165,9 +166,9 @@ class RigNode(Node):
         stamp = self.stamp_ns()
         self._last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
         data = self._enc.sample(*self._last, None if self.recorder is not None else self._live)
-        for pub, raw, live in zip(self._outputs, data, self._live, strict=True):
-            if live:
-                pub.publish(raw)
+        outputs = self._outputs
+        for k in self._live_at:
+            outputs[k].publish(data[k])
         if self.recorder is not None:
             self.recorder.record_outputs(data)
         if self.lockstep is not None:
@@ -180,6 +181,7 @@ class RigNode(Node):
         there are 17 outputs)."""
         executor.spin_once(timeout_sec=0.0)
         self._live = [p.get_subscription_count() > 0 for p in self._outputs]
+        self._live_at = [k for k, live in enumerate(self._live) if live]
 
     # ---- lockstep ----------------------------------------------------------------------
     def run_lockstep(self, executor: EventsExecutor, stop) -> None:
