@@ -65,8 +65,7 @@ class RigNode(Node):
         self.with_clock = bool(self.p["publish_clock"])
         self._enc = RigEncoders(self.with_clock)
         self._outputs = [self._publisher(t) for t in self._enc.topics]
-        self._live = [True] * len(self._outputs)  # back to back: outputs with a subscriber
-        self._live_at = list(range(len(self._outputs)))   # ... their places
+        self._set_live([True] * len(self._outputs))  # back to back: outputs with a subscriber
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
         self.commands = CommandInbox(self, self.p["qos_reliability"])
         self.superseded = 0                      # commands replaced within their tick
@@ -162,14 +161,28 @@ class RigNode(Node):
     def publish_sample(self, s: RigSample) -> None:
         """Measure the sample, encode both once; publish those bytes and record the very same
         bytes (not recording, back to back, only the outputs with a subscriber are encoded).
-        In lockstep the rig then waits for this tick's commands."""
+        In lockstep the rig then waits for this tick's commands.
+
+        Not recording, the exact outputs are published before the sensors measure (every
+        tick: their state goes on whether or not anyone listens), then the measured ones:
+        the same order (the table lists ``~/measured/`` last), but a lockstep controller that
+        reads exact outputs gets them ~15 us sooner and works while the node measures."""
         stamp = self.stamp_ns()
-        self._last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
-        data = self._enc.sample(*self._last, None if self.recorder is not None else self._live)
-        outputs = self._outputs
-        for k in self._live_at:
-            outputs[k].publish(data[k])
-        if self.recorder is not None:
+        outputs, enc = self._outputs, self._enc
+        if self.recorder is None:
+            exact = enc.sample(stamp, s, None, self._live_exact)
+            for k in self._live_exact_at:
+                outputs[k].publish(exact[k])
+            self._last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
+            if self._live_measured_at:
+                data = enc.sample(*self._last, self._live_measured)
+                for k in self._live_measured_at:
+                    outputs[k].publish(data[k])
+        else:
+            self._last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
+            data = enc.sample(*self._last)
+            for k in self._live_at:
+                outputs[k].publish(data[k])
             self.recorder.record_outputs(data)
         if self.lockstep is not None:
             self.lockstep.wait_for(stamp, time.monotonic())
@@ -180,8 +193,18 @@ class RigNode(Node):
         recorded, until they have one: a publish to no one costs ~6 us, an encoding ~5 us, and
         there are 17 outputs)."""
         executor.spin_once(timeout_sec=0.0)
-        self._live = [p.get_subscription_count() > 0 for p in self._outputs]
-        self._live_at = [k for k, live in enumerate(self._live) if live]
+        self._set_live([p.get_subscription_count() > 0 for p in self._outputs])
+
+    def _set_live(self, live: list[bool]) -> None:
+        """Which outputs are published (and, not recording, encoded); their places, exact
+        and measured apart (``publish_sample``)."""
+        measured = self._enc.measured
+        self._live = live
+        self._live_at = [k for k, on in enumerate(live) if on]
+        self._live_exact = [on and not m for on, m in zip(live, measured, strict=True)]
+        self._live_measured = [on and m for on, m in zip(live, measured, strict=True)]
+        self._live_exact_at = [k for k in self._live_at if not measured[k]]
+        self._live_measured_at = [k for k in self._live_at if measured[k]]
 
     # ---- lockstep ----------------------------------------------------------------------
     def run_lockstep(self, executor: EventsExecutor, stop) -> None:
