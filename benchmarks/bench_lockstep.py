@@ -2,14 +2,22 @@
 target: at most 0.3 ms a tick].
 
 A rig node in lockstep (``publish_clock``, ``lockstep``, ``start_paused``, 1000 Hz) runs in one
-process; the test suite's plain-rclpy PI controller (``tests/ros/lockstep_controller.py``: a
-subscription to ``~/bit/twist``, a publisher on ``~/cmd/top_drive``, EventsExecutor) runs in
-another, resumes the rig and answers --ticks samples. The controller times its first to its
-last answer; the figure is that over the ticks, with the CPU both processes used per tick.
-The machine's other load enters the figure: say how loaded it was.
+process; a PI controller on ``~/bit/twist`` answering on ``~/cmd/top_drive`` runs in another,
+resumes the rig and answers --ticks samples. The controller is, by default, the lean one
+(``lean_controller.py``: raw CDR bytes in and out, an rcl wait set, no executor), since the
+figure is meant to be the rig's cost and any controller may be written so; ``--controller
+rclpy`` runs the test suite's plain-rclpy PI (``tests/ros/lockstep_controller.py``, message
+objects, an executor) instead. The controller times its first to its last answer; the figure
+is that over the ticks, with the CPU both processes used per tick.
+
+Measured on 2 shared cores (load average from the other jobs): lean, 0.31-0.33 ms a tick at
+load 1.7, 0.33-0.35 ms at 2.1, 0.35-0.39 ms at 2.5-4 (CPU 0.21-0.25 ms node + 0.12-0.16 ms
+controller); the rclpy controller 0.40-0.42 ms at load 2.1. The machine's other load enters
+the figure: say how loaded it was.
 
 Run: .venv/bin/python benchmarks/bench_lockstep.py [--ticks 5000] [--record] [--repeat 3]
-         [--executor events|single]   (the controller's rclpy executor)
+         [--controller lean|rclpy] [--executor waitset|events|single]
+         (--executor: the lean controller's wait, or the rclpy controller's executor)
 """
 
 from __future__ import annotations
