@@ -2,14 +2,22 @@
 target: at most 0.3 ms a tick].
 
 A rig node in lockstep (``publish_clock``, ``lockstep``, ``start_paused``, 1000 Hz) runs in one
-process; the test suite's plain-rclpy PI controller (``tests/ros/lockstep_controller.py``: a
-subscription to ``~/bit/twist``, a publisher on ``~/cmd/top_drive``, EventsExecutor) runs in
-another, resumes the rig and answers --ticks samples. The controller times its first to its
-last answer; the figure is that over the ticks, with the CPU both processes used per tick.
-The machine's other load enters the figure: say how loaded it was.
+process; a PI controller on ``~/bit/twist`` answering on ``~/cmd/top_drive`` runs in another,
+resumes the rig and answers --ticks samples. The controller is, by default, the lean one
+(``lean_controller.py``: raw CDR bytes in and out, an rcl wait set, no executor), since the
+figure is meant to be the rig's cost and any controller may be written so; ``--controller
+rclpy`` runs the test suite's plain-rclpy PI (``tests/ros/lockstep_controller.py``, message
+objects, an executor) instead. The controller times its first to its last answer; the figure
+is that over the ticks, with the CPU both processes used per tick.
+
+Measured on 2 shared cores (load average from the other jobs): lean, 0.31-0.33 ms a tick at
+load 1.7, 0.33-0.35 ms at 2.1, 0.35-0.39 ms at 2.5-4 (CPU 0.21-0.25 ms node + 0.12-0.16 ms
+controller); the rclpy controller 0.40-0.42 ms at load 2.1. The machine's other load enters
+the figure: say how loaded it was.
 
 Run: .venv/bin/python benchmarks/bench_lockstep.py [--ticks 5000] [--record] [--repeat 3]
-         [--executor events|single]   (the controller's rclpy executor)
+         [--controller lean|rclpy] [--executor waitset|events|single]
+         (--executor: the lean controller's wait, or the rclpy controller's executor)
 """
 
 from __future__ import annotations
@@ -24,7 +32,9 @@ import tempfile
 from pathlib import Path
 
 BIN = Path(sys.executable).parent
-CONTROLLER = Path(__file__).resolve().parents[1] / "tests" / "ros" / "lockstep_controller.py"
+CONTROLLERS = {"lean": Path(__file__).resolve().parent / "lean_controller.py",
+               "rclpy": Path(__file__).resolve().parents[1] / "tests" / "ros"
+               / "lockstep_controller.py"}
 NS = "/bench_lockstep"
 
 
@@ -33,7 +43,8 @@ def _cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def run_once(ticks: int, record: Path | None, executor: str) -> tuple[float, float, float]:
+def run_once(ticks: int, record: Path | None, controller: str,
+             executor: str) -> tuple[float, float, float]:
     """(wall ms, node CPU ms, controller CPU ms) per lockstep tick."""
     args = [str(BIN / "drill_sim_node"), "--ros-args", "-r", f"__ns:={NS}",
             "-p", "publish_clock:=true", "-p", "lockstep:=true", "-p", "start_paused:=true"]
@@ -41,8 +52,9 @@ def run_once(ticks: int, record: Path | None, executor: str) -> tuple[float, flo
         args += ["-p", f"record:={record}"]
     node = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        ctl = subprocess.Popen([sys.executable, str(CONTROLLER), "--rig", f"{NS}/drill_sim",
-                                "--ticks", str(ticks), "--resume", "--executor", executor],
+        how = ["--executor", executor] if controller == "rclpy" else ["--wait", executor]
+        ctl = subprocess.Popen([sys.executable, str(CONTROLLERS[controller]), "--rig",
+                                f"{NS}/drill_sim", "--ticks", str(ticks), "--resume", *how],
                                stdout=subprocess.PIPE,
                                text=True)
         cpu_node0 = None
@@ -68,18 +80,23 @@ def main() -> None:
     parser.add_argument("--ticks", type=int, default=5000)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--record", action="store_true", help="the node records its bag too")
-    parser.add_argument("--executor", choices=("events", "single"), default="events")
+    parser.add_argument("--controller", choices=tuple(CONTROLLERS), default="lean")
+    parser.add_argument("--executor", choices=("events", "single", "waitset"), default=None,
+                        help="rclpy: its executor (events, default; single); lean: its wait "
+                        "(waitset, default; events)")
     args = parser.parse_args()
+    args.executor = args.executor or ("waitset" if args.controller == "lean" else "events")
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 230)))
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     print(f"lockstep, 1000 Hz, one PI controller in another process, {args.ticks} ticks"
-          f"{', recording' if args.record else ''}, controller executor {args.executor}; "
+          f"{', recording' if args.record else ''}, controller {args.controller} "
+          f"({args.executor}); "
           "load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.repeat):
             bag = Path(tmp) / f"run{k}" if args.record else None
-            wall, node_cpu, ctl_cpu = run_once(args.ticks, bag, args.executor)
+            wall, node_cpu, ctl_cpu = run_once(args.ticks, bag, args.controller, args.executor)
             print(f"run {k + 1}: {wall:.3f} ms wall a tick (target <= 0.3 ms), CPU "
                   f"{node_cpu:.3f} ms node + {ctl_cpu:.3f} ms controller a tick; "
                   f"{1.0 / wall:.2f} x real time")

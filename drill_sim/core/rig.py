@@ -325,31 +325,31 @@ class Rig:
         this every tick). WOB and TOB are the means since the previous sample (``mean_forces``;
         the node samples every tick, so the tick mean); everything else is the value now."""
         wob_n, tob_nm = self.mean_forces()
-        x, regime = self.sim.live_state, self.sim.regime
+        x, regime = self.sim.live_state.tolist(), self.sim.regime   # floats: one call, not 10
         sc = self.scales
         c = sc.stiffness_nm_per_rad
         kinematic = self.sim.drive.mode == "kinematic"
         return RigSample(
             time_s=self.time_s,
-            bit_speed_rad_s=float(x[kn.X_OMEGA]) / sc.time_s,
-            rop_m_s=float(x[kn.X_V]) * sc.velocity_m_s,
+            bit_speed_rad_s=x[kn.X_OMEGA] / sc.time_s,
+            rop_m_s=x[kn.X_V] * sc.velocity_m_s,
             wob_n=wob_n,
             tob_nm=tob_nm,
-            surface_torque_nm=float(x[kn.X_TS]) * c,
-            depth_of_cut_m=self.groups.n * float(x[kn.X_DELTA]) * sc.length_m,
-            bit_depth_m=float(x[kn.X_U]) * sc.length_m,
+            surface_torque_nm=x[kn.X_TS] * c,
+            depth_of_cut_m=self.groups.n * x[kn.X_DELTA] * sc.length_m,
+            bit_depth_m=x[kn.X_U] * sc.length_m,
             hole_depth_m=max(0.0, self.sim.hole_bottom) * sc.length_m,
-            bit_angle_rad=float(x[kn.X_PHI]),
-            top_drive_angle_rad=float(x[kn.X_PHI_TD]),
+            bit_angle_rad=x[kn.X_PHI],
+            top_drive_angle_rad=x[kn.X_PHI_TD],
             top_drive_speed_rad_s=self._speed_rad_s if kinematic
-            else float(x[kn.X_OMEGA_TD]) / sc.time_s,
+            else x[kn.X_OMEGA_TD] / sc.time_s,
             hook_load_n=self._hook_load_n,
             stuck=bool(regime == kn.REGIME_STUCK),
             off_bottom=bool(regime == kn.REGIME_OFF_BOTTOM),
             stick_slip=self.sim.stick_slip,
             regime=regime,
             top_drive_speed_setpoint_rad_s=self._speed_rad_s,
-            motor_torque_nm=float(x[kn.X_TS if kinematic else kn.X_TM]) * c,
+            motor_torque_nm=x[kn.X_TS if kinematic else kn.X_TM] * c,
         )
 
     def metrics(self) -> dict[str, float]:

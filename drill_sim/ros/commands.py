@@ -17,7 +17,7 @@ of the same topic replaced within the same tick.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
@@ -29,9 +29,9 @@ from ..wire.rig_topics import RigTopic
 from .topics import message_class, rclpy_qos
 
 
-@dataclass(frozen=True)
-class Command:
-    """One command message as taken: its topic, its bytes and what they hold."""
+class Command(NamedTuple):
+    """One command message as taken: its topic, its bytes and what they hold. A named tuple:
+    in lockstep one is built every tick, ~1 us cheaper than a frozen dataclass."""
 
     topic: RigTopic
     data: bytes                      # the CDR bytes as received
@@ -62,16 +62,25 @@ class CommandInbox:
         self.received = self.lost = self.undecodable = 0
         self._last_sequence: dict[str, int] = {}
         self._context = node.context.handle
+        self._watched = [h for _, h, _ in self._subs]
         self._wait_set = _rclpy.WaitSet(len(self._subs), 0, 0, 0, 0, 0, self._context)
 
+    def wait_on(self, names: tuple[str, ...] | None) -> None:
+        """Let ``wait`` wake only for these topics (table names; None: every command topic).
+        A wait costs ~3 us of CPU more per topic it watches (Fast DDS attaches and detaches a
+        condition for each), and in lockstep only the lockstep topics release a tick."""
+        self._watched = [h for t, h, _ in self._subs if names is None or t.name in names]
+        self._wait_set.destroy_when_not_in_use()
+        self._wait_set = _rclpy.WaitSet(len(self._watched), 0, 0, 0, 0, 0, self._context)
+
     def wait(self, timeout_s: float) -> None:
-        """Block until a command has arrived on any topic, or ``timeout_s`` [s] passed:
-        the middleware wakes the thread, so a lockstep wait costs no CPU and no polling
-        delay."""
+        """Block until a command has arrived on a watched topic (``wait_on``), or
+        ``timeout_s`` [s] passed: the middleware wakes the thread, so a lockstep wait costs
+        no CPU and no polling delay."""
         ws = self._wait_set
         with self._context:
             ws.clear_entities()
-            for _, handle, _ in self._subs:
+            for handle in self._watched:
                 ws.add_subscription(handle)
             ws.wait(max(0, int(timeout_s * 1e9)))
 
@@ -108,4 +117,4 @@ class CommandInbox:
         self._wait_set.destroy_when_not_in_use()
         for _, handle, _ in self._subs:
             handle.destroy_when_not_in_use()
-        self._subs = []
+        self._subs, self._watched = [], []

@@ -65,7 +65,7 @@ class RigNode(Node):
         self.with_clock = bool(self.p["publish_clock"])
         self._enc = RigEncoders(self.with_clock)
         self._outputs = [self._publisher(t) for t in self._enc.topics]
-        self._live = [True] * len(self._outputs)  # back to back: outputs with a subscriber
+        self._set_live([True] * len(self._outputs))  # back to back: outputs with a subscriber
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
         self.commands = CommandInbox(self, self.p["qos_reliability"])
         self.superseded = 0                      # commands replaced within their tick
@@ -161,14 +161,28 @@ class RigNode(Node):
     def publish_sample(self, s: RigSample) -> None:
         """Measure the sample, encode both once; publish those bytes and record the very same
         bytes (not recording, back to back, only the outputs with a subscriber are encoded).
-        In lockstep the rig then waits for this tick's commands."""
+        In lockstep the rig then waits for this tick's commands.
+
+        Not recording, the exact outputs are published before the sensors measure (every
+        tick: their state goes on whether or not anyone listens), then the measured ones:
+        the same order (the table lists ``~/measured/`` last), but a lockstep controller that
+        reads exact outputs gets them ~15 us sooner and works while the node measures."""
         stamp = self.stamp_ns()
-        self._last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
-        data = self._enc.sample(*self._last, None if self.recorder is not None else self._live)
-        for pub, raw, live in zip(self._outputs, data, self._live, strict=True):
-            if live:
-                pub.publish(raw)
-        if self.recorder is not None:
+        outputs, enc = self._outputs, self._enc
+        if self.recorder is None:
+            exact = enc.sample(stamp, s, None, self._live_exact)
+            for k in self._live_exact_at:
+                outputs[k].publish(exact[k])
+            self._last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
+            if self._live_measured_at:
+                data = enc.sample(*self._last, self._live_measured)
+                for k in self._live_measured_at:
+                    outputs[k].publish(data[k])
+        else:
+            self._last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
+            data = enc.sample(*self._last)
+            for k in self._live_at:
+                outputs[k].publish(data[k])
             self.recorder.record_outputs(data)
         if self.lockstep is not None:
             self.lockstep.wait_for(stamp, time.monotonic())
@@ -179,14 +193,32 @@ class RigNode(Node):
         recorded, until they have one: a publish to no one costs ~6 us, an encoding ~5 us, and
         there are 17 outputs)."""
         executor.spin_once(timeout_sec=0.0)
-        self._live = [p.get_subscription_count() > 0 for p in self._outputs]
+        self._set_live([p.get_subscription_count() > 0 for p in self._outputs])
+
+    def _set_live(self, live: list[bool]) -> None:
+        """Which outputs are published (and, not recording, encoded); their places, exact
+        and measured apart (``publish_sample``)."""
+        measured = self._enc.measured
+        self._live = live
+        self._live_at = [k for k, on in enumerate(live) if on]
+        self._live_exact = [on and not m for on, m in zip(live, measured, strict=True)]
+        self._live_measured = [on and m for on, m in zip(live, measured, strict=True)]
+        self._live_exact_at = [k for k in self._live_at if not measured[k]]
+        self._live_measured_at = [k for k in self._live_at if measured[k]]
 
     # ---- lockstep ----------------------------------------------------------------------
     def run_lockstep(self, executor: EventsExecutor, stop) -> None:
         """Publish a tick, wait for a command stamped with its time on every lockstep topic
         (blocked in the middleware: no CPU spent), advance one tick, and so on; services,
-        parameters and diagnostics are served every LOCKSTEP_SERVE_PERIOD_S and while paused."""
+        parameters and diagnostics are served every LOCKSTEP_SERVE_PERIOD_S and while paused.
+
+        Per tick one wait, then one take (right after publishing nothing can have answered
+        yet), and the wait watches only the lockstep topics: with Fast DDS a wait costs ~25 us
+        of CPU plus ~3 us per topic watched, and only lockstep topics release a tick. Other
+        commands are still taken with each tick's; while the rig waits they are taken at the
+        latest every LOCKSTEP_SERVE_PERIOD_S."""
         ls = self.lockstep
+        self.commands.wait_on(ls.topics)
         next_serve = 0.0
         while not stop:
             if self.paused:
@@ -203,7 +235,7 @@ class RigNode(Node):
                 if self.advance(1):
                     self.pacer.advanced(1)
                     self.publish_sample(self.rig.sample())
-            else:
+            if not ls.complete and not self.paused:
                 if ls.overdue(now):
                     self._lockstep_overdue(now)
                 self.commands.wait(min(max(next_serve - now, 0.0), ls.until_overdue(now)))

@@ -5,6 +5,7 @@ publishes and records these bytes; tools and benchmarks that make rig bags offli
 
 from __future__ import annotations
 
+from itertools import compress
 from typing import TYPE_CHECKING
 
 from . import cdr, rig_topics
@@ -26,14 +27,15 @@ class RigEncoders:
                                [(f.message, f.sample) for f in t.fields])
             for t in self.topics]
         self._measured = [t.source == rig_topics.MEASURED for t in self.topics]
+        self.measured = tuple(self._measured)    # which topics show the sensors (``m``)
 
     def sample(self, stamp_ns: int, s: RigSample, m: Measured | None = None,
                only: list[bool] | None = None) -> list[bytes]:
         """One tick's messages stamped ``stamp_ns`` [ns], in the order of ``topics``: the
         exact ones from ``s``, the ``~/measured/`` ones from ``m`` (None: the ideal sensors'
-        reading of ``s``, ``core.sensors.exact_measured``). only: which to encode (the others
-        are empty bytes); None: all."""
-        if m is None:
+        reading of ``s``, ``core.sensors.exact_measured``, made only if one of them is
+        encoded). only: which to encode (the others are empty bytes); None: all."""
+        if m is None and (only is None or any(compress(self._measured, only))):
             from ..core.sensors import exact_measured
             m = exact_measured(s)
         sec, nsec = divmod(stamp_ns, 1_000_000_000)
