@@ -35,6 +35,7 @@ class BitSpeedPI(Node):
         super().__init__("lockstep_controller")
         self.args = args
         self.answered = 0
+        self.done = False                # answered --ticks samples and saw the rig move on
         self.integral = 0.0
         self.last_s: float | None = None
         self.last_stamp: tuple[int, int] | None = None
@@ -48,6 +49,10 @@ class BitSpeedPI(Node):
     def on_sample(self, sample: TwistStamped) -> None:
         a = self.args
         if a.ticks and self.answered >= a.ticks:
+            # the rig took the last answer once it publishes the next tick: only then is the
+            # session's end the same in every run (stopping the rig before could lose that tick)
+            self.done = self.done or (sample.header.stamp.sec, sample.header.stamp.nanosec) \
+                != self.last_stamp
             return
         stamp = (sample.header.stamp.sec, sample.header.stamp.nanosec)
         if stamp == self.last_stamp:                          # the same tick published again
@@ -101,7 +106,7 @@ def main() -> int:
             while not future.done():
                 executor.spin_once(timeout_sec=0.01)
         print("connected", flush=True)
-        while not args.ticks or node.answered < args.ticks:
+        while not args.ticks or not node.done:
             executor.spin_once(timeout_sec=0.1)
         print(f"answered {node.answered} in {node.last_wall - node.first_wall:.6f} s",
               flush=True)
