@@ -101,7 +101,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--ros", action="store_true",
                         help="run each law through the installed nodes in lockstep (the rig node "
                              "and drill_sim_controller) and score the rig's samples; every "
-                             "scenario but switch_on (changing set-points are played in the "
+                             "scenario (changing set-points and a switch-on are played in the "
                              "lockstep)")
     parser.add_argument("--ros-controller", metavar="COMMAND", default=None,
                         help="with --ros: score this controller command line instead (it must "

@@ -13,8 +13,10 @@ rig's ``cmd/hook_load`` (a lockstep topic, so the rig waits for it as for the to
 speed set-point of sample k, stamped k·h, to the controller, which with ``setpoint_lockstep``
 waits for it and applies it before stepping sample k. These are the offline loop's instants
 (``run_loop``: set-point k at sample k, hook load k held over k..k+1), so both loops agree to
-round-off whatever the wall-clock order of the messages. A switch-on (the drive's own loop
-before the law) is offline only.
+round-off whatever the wall-clock order of the messages. A switch-on runs the controller with
+``stiff_pi`` (the offline loop's drive loop) until then; on the switch-on tick this process
+sets the controller's ``law`` and only once that is done sends the tick's set-point, so the
+law takes over (bumplessly) at exactly that sample, as offline.
 """
 
 from __future__ import annotations
@@ -50,12 +52,12 @@ def executable(name: str) -> str:
 
 
 def check_ros(scenario: Scenario, *, user_command: str | None = None) -> None:
-    """ParameterError for a scenario the nodes cannot play: a switch-on (the drive's own loop
-    before the law) is offline only, and a user's controller is given no set-point, so its
-    scenario's speed must be constant."""
-    if scenario.switch_on_s > 0.0:
-        raise ParameterError(f"scenario {scenario.name!r}: --ros runs no switch-on "
-                             "(switch_on_s > 0): expected a scenario with the law from the start")
+    """ParameterError for a scenario the nodes cannot play with a user's controller: it is
+    given no set-point and no switch-on, so its scenario's speed must be constant and its law
+    on from the start."""
+    if user_command and scenario.switch_on_s > 0.0:
+        raise ParameterError(f"scenario {scenario.name!r}: a --ros-controller cannot be "
+                             "switched on: expected a scenario with the law from the start")
     if user_command and len({v for _, v in scenario.rpm_points}) > 1:
         raise ParameterError(f"scenario {scenario.name!r}: a --ros-controller gets no stamped "
                              "set-point: expected a constant rpm")
@@ -111,14 +113,17 @@ def controller_command(preset: Preset, scenario: Scenario, settings: LoopSetting
         return None
     speed_set, _ = tick_commands(preset, scenario, settings)
     drive = law_top_drive(preset, settings.law, settings.top_drive)
-    params = {"rig": RIG, "law": settings.law, "inputs": "measured",
+    first = "stiff_pi" if scenario.switch_on_s > 0.0 else settings.law   # the drive's loop
+    params = {"rig": RIG, "law": first, "inputs": "measured",
               "sample_period_s": repr(settings.sample_period_s),
               "impedance_nm_s_rad": repr(pipe_impedance(preset)),
               "top_drive_inertia_kg_m2": repr(drive.top_drive_inertia_kg_m2),
               "initial_speed_setpoint_rad_s": repr(float(speed_set[0])),
               "setpoint_topic": SETPOINT, "setpoint_lockstep": "true",
               f"{settings.law}.torque_min_nm": repr(drive.motor_torque_min_nm),
-              f"{settings.law}.torque_max_nm": repr(drive.motor_torque_max_nm)}
+              f"{settings.law}.torque_max_nm": repr(drive.motor_torque_max_nm),
+              "stiff_pi.torque_min_nm": repr(drive.motor_torque_min_nm),
+              "stiff_pi.torque_max_nm": repr(drive.motor_torque_max_nm)}
     params.update({f"{settings.law}.{k}": repr(float(v)) for k, v in settings.gains.items()})
     cmd = [executable("drill_sim_controller"), "--ros-args", "-r", f"__ns:={NS}"]
     for k, v in params.items():
@@ -133,6 +138,9 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
     SERIES), through the nodes in lockstep."""
     import rclpy
     from geometry_msgs.msg import TwistStamped, WrenchStamped
+    from rcl_interfaces.msg import Parameter as ParameterMsg
+    from rcl_interfaces.msg import ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
     from sensor_msgs.msg import JointState
     from std_msgs.msg import UInt8
     from std_srvs.srv import SetBool
@@ -164,6 +172,29 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
     load = WrenchStamped()
     load.header.frame_id = "top_drive"
 
+    # the switch-on sample (offline: ceil(switch_on_s / h)); the kinematic row has none
+    switch_k = None if kinematic or scenario.switch_on_s <= 0.0 else \
+        math.ceil(scenario.switch_on_s / settings.sample_period_s - 1e-9)
+    switcher = node.create_client(SetParameters, f"{NS}/drill_sim_controller/set_parameters")
+    switched: list[bool] = []                  # the controller's answer to the switch
+    switching: list[int] = []                  # the switch was asked for
+
+    def switch_then_publish(setpoint: TwistStamped) -> None:
+        """The law on, then the switch-on sample's set-point: the controller waits for that
+        set-point, so the new law steps first on that very sample."""
+        value = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=settings.law)
+        future = switcher.call_async(SetParameters.Request(
+            parameters=[ParameterMsg(name="law", value=value)]))
+
+        def done(f) -> None:
+            result = f.result()
+            if result is None or not result.results or not result.results[0].successful:
+                switched.append(False)
+                return
+            switched.append(True)
+            speed_pub.publish(setpoint)
+        future.add_done_callback(done)
+
     def on_bit(m) -> None:
         """Tick k: the set-point of sample k (the kinematic row's speed command, else the
         controller's set-point) and the hook load held over k..k+1, both stamped k·h."""
@@ -172,8 +203,17 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
         answer.header.stamp = load.header.stamp = m.header.stamp
         answer.twist.angular.z = float(speed_set[k])
         load.wrench.force.z = float(hook[k])
-        speed_pub.publish(answer)
         hook_pub.publish(load)
+        if k == switch_k:                        # once, even if the rig repeats the tick
+            if not switching:
+                switching.append(k)
+                later = TwistStamped()
+                later.header.frame_id = answer.header.frame_id
+                later.header.stamp = m.header.stamp
+                later.twist.angular.z = float(speed_set[k])
+                switch_then_publish(later)
+            return
+        speed_pub.publish(answer)
 
     node.create_subscription(TwistStamped, f"{RIG}/bit/twist", on_bit, depth)
     node.create_subscription(UInt8, f"{RIG}/bit/regime", lambda m: data["stuck"].__setitem__(
@@ -204,6 +244,7 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
         while not (pause.service_is_ready() and node.count_publishers(cmd_topic) > 0
                    and hook_pub.get_subscription_count() > 0
                    and (ctl is None or user_command or speed_pub.get_subscription_count() > 0)
+                   and (switch_k is None or switcher.service_is_ready())
                    and node.count_publishers(f"{RIG}/joint_states") > 0
                    and (ctl is None or node.count_subscribers(
                        f"{RIG}/measured/top_drive/motor_wrench") > 0)):
@@ -218,6 +259,8 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
         while min(len(v) for v in data.values()) < n:
             rclpy.spin_once(node, timeout_sec=0.05)
             _check_alive(procs)
+            if switched and not switched[0]:
+                raise OSError(f"the controller refused law = {settings.law} at switch-on")
             if time.monotonic() > end:
                 raise OSError(f"lockstep run stalled: {min(len(v) for v in data.values())} of "
                               f"{n} ticks after {timeout_s:g} s")
