@@ -100,8 +100,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "name, when there are several")
     parser.add_argument("--ros", action="store_true",
                         help="run each law through the installed nodes in lockstep (the rig node "
-                             "and drill_sim_controller) and score the rig's samples; steady "
-                             "scenarios (--rpm, --wob-kn) only")
+                             "and drill_sim_controller) and score the rig's samples; every "
+                             "scenario (changing set-points and a switch-on are played in the "
+                             "lockstep)")
     parser.add_argument("--ros-controller", metavar="COMMAND", default=None,
                         help="with --ros: score this controller command line instead (it must "
                              "answer each tick on the rig's ~/cmd/top_drive_torque with the "
@@ -172,8 +173,8 @@ def _ros_row(preset, scenario: Scenario, settings: LoopSettings, user: str | Non
              progress) -> LoopResult:
     """One law through the nodes in lockstep, scored on the rig's samples."""
     from ..control.evaluation import sample_metrics
-    from ..ros.evaluation import check_steady, run_ros
-    check_steady(scenario)
+    from ..ros.evaluation import check_ros, run_ros
+    check_ros(scenario, user_command=user)
     series = run_ros(preset, scenario, settings, user_command=user, progress=progress)
     drive = None if settings.law == "kinematic" else law_top_drive(preset, settings.law,
                                                                     settings.top_drive)

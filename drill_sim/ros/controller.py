@@ -6,7 +6,10 @@ Every rig tick it takes the top-drive speed, the motor torque applied and the su
 the law once those three readings of the same stamp are in, and publishes the motor torque on
 the rig's ``~/cmd/top_drive_torque`` stamped with that sample's stamp (what the rig's lockstep
 mode waits for). The set-point is the speed on ``setpoint_topic`` (default the rig's own
-``~/cmd/top_drive``, so a driller's speed commands steer it). Law, gains and ``enabled`` change
+``~/cmd/top_drive``, so a driller's speed commands steer it); with ``setpoint_lockstep`` each
+sample also waits for a set-point stamped with its stamp and applies it before the law's step,
+so a changing set-point meets the samples in a defined order (a scenario player in lockstep
+with the rig, e.g. ``drill_sim control --ros``). Law, gains and ``enabled`` change
 at run time, validated, without a bump; ``/diagnostics`` reports law, saturation and wind-up.
 """
 
@@ -96,6 +99,9 @@ class ControllerNode(Node):
         if p["inputs"] not in ("measured", "exact"):
             raise SystemExit(f"{NODE_NAME}: inputs = {p['inputs']!r}: expected measured or exact")
         use = 1 if p["inputs"] == "measured" else 2
+        # a slot per stamp: speed, motor and surface torque, and (setpoint_lockstep) the
+        # set-point stamped for that sample
+        self._slot_size = 4 if p["setpoint_lockstep"] else 3
         self._pending: dict[int, list[float | None]] = {}
         self._last: SurfaceMeasurement | None = None
         self._index = {}
@@ -139,6 +145,8 @@ class ControllerNode(Node):
             ("setpoint_topic", "", "TwistStamped speed set-point [rad/s]; '': the rig's "
                                    "~/cmd/top_drive"),
             ("initial_speed_setpoint_rad_s", 2.0 * math.pi, "set-point until one arrives"),
+            ("setpoint_lockstep", False, "true: each sample waits for a set-point stamped with "
+                                         "its stamp and applies it before the step"),
             ("manage_drive_mode", False, "set the rig's top_drive_mode: torque when enabled, "
                                          "speed when disabled"),
             ("diagnostics_period_s", 1.0, "/diagnostics period [s]"),
@@ -148,7 +156,7 @@ class ControllerNode(Node):
             values[name] = self.declare_parameter(
                 name, default, d(description=text, read_only=name in (
                     "rig", "sample_period_s", "inputs", "setpoint_topic",
-                    "diagnostics_period_s"))).value
+                    "setpoint_lockstep", "diagnostics_period_s"))).value
         z, j = float(values["impedance_nm_s_rad"]), float(values["top_drive_inertia_kg_m2"])
         for law in CONTROL_LAWS:
             for gain, default in law_gain_defaults(law, z, j).items():
@@ -220,30 +228,34 @@ class ControllerNode(Node):
     # ---- the loop -----------------------------------------------------------------------
     def _on_setpoint(self, msg: TwistStamped) -> None:
         speed = msg.twist.angular.z
-        if math.isfinite(speed):
+        if self._slot_size == 4:              # applied at the sample with its stamp
+            self._on_input(3, msg)
+        elif math.isfinite(speed):
             self.core.set_speed(speed)
         else:
             self.get_logger().warn(f"set-point {speed!r} rad/s ignored: expected a finite speed")
 
     def _on_input(self, i: int, msg) -> None:
         stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        value = msg.twist.angular.z if i == 0 else msg.wrench.torque.z
+        value = msg.twist.angular.z if i in (0, 3) else msg.wrench.torque.z
         slot = self._pending.get(stamp)
         if slot is None:
             if len(self._pending) > 16:              # an input that never came: forget it
                 for old in sorted(self._pending)[:-8]:
                     del self._pending[old]
-            slot = self._pending[stamp] = [None, None, None]
+            slot = self._pending[stamp] = [None] * self._slot_size
         slot[i] = value
         if None in slot:
             return
         del self._pending[stamp]
         for old in [s for s in self._pending if s < stamp]:
             del self._pending[old]
-        speed, motor, surface = slot
+        speed, motor, surface = slot[:3]
         if not all(math.isfinite(v) for v in slot):
             self.get_logger().warn(f"sample at {stamp * 1e-9:.3f} s skipped: non-finite input")
             return
+        if self._slot_size == 4:                     # this sample's set-point, before its step
+            self.core.set_speed(slot[3])
         m = SurfaceMeasurement(stamp * 1e-9, speed, motor, surface)
         if self._last is not None and m.time_s == self._last.time_s:
             if self.core.last_output is not None and self.core.enabled:   # a tick published

@@ -5,9 +5,18 @@ command, started paused) and a controller — ``drill_sim_controller`` with the 
 any command line that speaks the rig's topics — run in subprocesses in their own namespace; this
 process records the rig's exact outputs at every tick, releases the pause once everyone is
 connected and stops after the scenario's duration. The kinematic row has no controller: this
-process answers each tick with the speed set-point. Steady scenarios only (constant set-points,
-no switch-on): a set-point that changes would reach the controller in no defined order with the
-samples.
+process answers each tick with the speed set-point.
+
+Set-points that change (a WOB step, a speed ramp) are played by this process in the lockstep:
+on tick k (stamp k·h) it sends the hook load for the interval after it, stamped k·h, on the
+rig's ``cmd/hook_load`` (a lockstep topic, so the rig waits for it as for the torque) and the
+speed set-point of sample k, stamped k·h, to the controller, which with ``setpoint_lockstep``
+waits for it and applies it before stepping sample k. These are the offline loop's instants
+(``run_loop``: set-point k at sample k, hook load k held over k..k+1), so both loops agree to
+round-off whatever the wall-clock order of the messages. A switch-on runs the controller with
+``stiff_pi`` (the offline loop's drive loop) until then; on the switch-on tick this process
+sets the controller's ``law`` and only once that is done sends the tick's set-point, so the
+law takes over (bumplessly) at exactly that sample, as offline.
 """
 
 from __future__ import annotations
@@ -30,6 +39,7 @@ from ..core.parameters import ParameterError
 
 NS = "/drill_sim_control"
 RIG = f"{NS}/drill_sim"
+SETPOINT = f"{NS}/speed_setpoint"        # this process's stamped set-points to the controller
 SERIES = ("bit_speed_rad_s", "stuck", "surface_torque_nm", "motor_torque_nm", "bit_depth_m",
           "top_drive_angle_rad", "wob_n", "top_drive_speed_rad_s")
 
@@ -41,23 +51,43 @@ def executable(name: str) -> str:
     return str(beside)
 
 
-def check_steady(scenario: Scenario) -> tuple[float, float]:
-    """(speed set-point [rad/s], W0 [N]) of a steady scenario; ParameterError otherwise."""
-    if len(scenario.rpm_points) != 1 or len(scenario.wob_kn_points) != 1 \
-            or scenario.switch_on_s > 0.0:
-        raise ParameterError(f"scenario {scenario.name!r}: --ros runs steady scenarios only "
-                             "(one rpm and one WOB, no switch-on): expected --rpm and --wob-kn")
-    return scenario.rpm_points[0][1] * RPM, 1e3 * scenario.wob_kn_points[0][1]
+def check_ros(scenario: Scenario, *, user_command: str | None = None) -> None:
+    """ParameterError for a scenario the nodes cannot play with a user's controller: it is
+    given no set-point and no switch-on, so its scenario's speed must be constant and its law
+    on from the start."""
+    if user_command and scenario.switch_on_s > 0.0:
+        raise ParameterError(f"scenario {scenario.name!r}: a --ros-controller cannot be "
+                             "switched on: expected a scenario with the law from the start")
+    if user_command and len({v for _, v in scenario.rpm_points}) > 1:
+        raise ParameterError(f"scenario {scenario.name!r}: a --ros-controller gets no stamped "
+                             "set-point: expected a constant rpm")
+
+
+def tick_commands(preset: Preset, scenario: Scenario, settings: LoopSettings
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """(speed set-point [rad/s], hook load [N]) at each tick k·h, as ``run_loop`` computes
+    them, so the nodes get the very numbers the offline loop uses."""
+    check_ros(scenario)
+    h = settings.sample_period_s
+    n = math.floor(scenario.duration_s / h + 1e-9)
+    speed_set, wob_kn = scenario.values(np.arange(n + 1) * h)
+    hook = preset.rig.submerged_weight_n - 1e3 * wob_kn
+    if np.any(hook < 0.0):
+        raise ParameterError(f"wob_kn up to {wob_kn.max():g} kN is out of range: expected at "
+                             f"most W_s = {preset.rig.submerged_weight_n / 1e3:g} kN")
+    return speed_set, hook
 
 
 def rig_command(preset: Preset, scenario: Scenario, settings: LoopSettings) -> list[str]:
-    speed, wob = check_steady(scenario)
+    speed_set, _ = tick_commands(preset, scenario, settings)
+    speed = float(speed_set[0])
+    wob = 1e3 * float(scenario.values(np.zeros(1))[1][0])
     if scenario.start_rpm is not None:            # a steady start away from the set-point
         speed = scenario.start_rpm * RPM
     drive = law_top_drive(preset, settings.law, settings.top_drive)
     topic = "cmd/top_drive" if settings.law == "kinematic" else "cmd/top_drive_torque"
     params = {"preset": preset.name, "publish_clock": "true", "lockstep": "true",
-              "lockstep_topics": f"[{topic}]", "start_paused": "true",
+              "lockstep_topics": f"[{topic}, cmd/hook_load]", "start_paused": "true",
               "lockstep_timeout_s": "3600.0",
               "rate_hz": repr(1.0 / settings.sample_period_s),
               "top_drive_mode": drive.top_drive_mode,
@@ -81,16 +111,19 @@ def controller_command(preset: Preset, scenario: Scenario, settings: LoopSetting
         return [*shlex.split(user_command), "--ros-args", "-r", f"__ns:={NS}"]
     if settings.law == "kinematic":
         return None
-    speed, _ = check_steady(scenario)
+    speed_set, _ = tick_commands(preset, scenario, settings)
     drive = law_top_drive(preset, settings.law, settings.top_drive)
-    params = {"rig": RIG, "law": settings.law, "inputs": "measured",
+    first = "stiff_pi" if scenario.switch_on_s > 0.0 else settings.law   # the drive's loop
+    params = {"rig": RIG, "law": first, "inputs": "measured",
               "sample_period_s": repr(settings.sample_period_s),
               "impedance_nm_s_rad": repr(pipe_impedance(preset)),
               "top_drive_inertia_kg_m2": repr(drive.top_drive_inertia_kg_m2),
-              "initial_speed_setpoint_rad_s": repr(speed),
-              "setpoint_topic": f"{NS}/speed_setpoint_unused",
+              "initial_speed_setpoint_rad_s": repr(float(speed_set[0])),
+              "setpoint_topic": SETPOINT, "setpoint_lockstep": "true",
               f"{settings.law}.torque_min_nm": repr(drive.motor_torque_min_nm),
-              f"{settings.law}.torque_max_nm": repr(drive.motor_torque_max_nm)}
+              f"{settings.law}.torque_max_nm": repr(drive.motor_torque_max_nm),
+              "stiff_pi.torque_min_nm": repr(drive.motor_torque_min_nm),
+              "stiff_pi.torque_max_nm": repr(drive.motor_torque_max_nm)}
     params.update({f"{settings.law}.{k}": repr(float(v)) for k, v in settings.gains.items()})
     cmd = [executable("drill_sim_controller"), "--ros-args", "-r", f"__ns:={NS}"]
     for k, v in params.items():
@@ -105,17 +138,23 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
     SERIES), through the nodes in lockstep."""
     import rclpy
     from geometry_msgs.msg import TwistStamped, WrenchStamped
+    from rcl_interfaces.msg import Parameter as ParameterMsg
+    from rcl_interfaces.msg import ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
     from sensor_msgs.msg import JointState
     from std_msgs.msg import UInt8
     from std_srvs.srv import SetBool
 
-    speed, _ = check_steady(scenario)
-    n = math.floor(scenario.duration_s / settings.sample_period_s + 1e-9) + 1
+    check_ros(scenario, user_command=user_command)
+    speed_set, hook = tick_commands(preset, scenario, settings)
+    n = len(speed_set)
+    ns_per_tick = round(settings.sample_period_s * 1e9)
     data: dict[str, dict[int, float]] = {k: {} for k in SERIES}
     owns = not rclpy.ok()
     if owns:
         rclpy.init()
     node = rclpy.create_node("drill_sim_control_harness")
+    depth, depth_out = 10000, 100
     procs: list[subprocess.Popen] = []
 
     def stamp(m) -> int:
@@ -124,18 +163,58 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
     def put(key: str, m, value: float) -> None:
         data[key][stamp(m)] = value
 
-    speed_pub = node.create_publisher(TwistStamped, f"{RIG}/cmd/top_drive", 10)
+    kinematic = settings.law == "kinematic"
+    speed_pub = node.create_publisher(
+        TwistStamped, f"{RIG}/cmd/top_drive" if kinematic else SETPOINT, depth_out)
+    hook_pub = node.create_publisher(WrenchStamped, f"{RIG}/cmd/hook_load", depth_out)
     answer = TwistStamped()
     answer.header.frame_id = "top_drive"
-    answer.twist.angular.z = speed
+    load = WrenchStamped()
+    load.header.frame_id = "top_drive"
+
+    # the switch-on sample (offline: ceil(switch_on_s / h)); the kinematic row has none
+    switch_k = None if kinematic or scenario.switch_on_s <= 0.0 else \
+        math.ceil(scenario.switch_on_s / settings.sample_period_s - 1e-9)
+    switcher = node.create_client(SetParameters, f"{NS}/drill_sim_controller/set_parameters")
+    switched: list[bool] = []                  # the controller's answer to the switch
+    switching: list[int] = []                  # the switch was asked for
+
+    def switch_then_publish(setpoint: TwistStamped) -> None:
+        """The law on, then the switch-on sample's set-point: the controller waits for that
+        set-point, so the new law steps first on that very sample."""
+        value = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value=settings.law)
+        future = switcher.call_async(SetParameters.Request(
+            parameters=[ParameterMsg(name="law", value=value)]))
+
+        def done(f) -> None:
+            result = f.result()
+            if result is None or not result.results or not result.results[0].successful:
+                switched.append(False)
+                return
+            switched.append(True)
+            speed_pub.publish(setpoint)
+        future.add_done_callback(done)
 
     def on_bit(m) -> None:
+        """Tick k: the set-point of sample k (the kinematic row's speed command, else the
+        controller's set-point) and the hook load held over k..k+1, both stamped k·h."""
         put("bit_speed_rad_s", m, m.twist.angular.z)
-        if settings.law == "kinematic":            # the kinematic row: answer the tick here
-            answer.header.stamp = m.header.stamp
-            speed_pub.publish(answer)
+        k = min(round(stamp(m) / ns_per_tick), n - 1)
+        answer.header.stamp = load.header.stamp = m.header.stamp
+        answer.twist.angular.z = float(speed_set[k])
+        load.wrench.force.z = float(hook[k])
+        hook_pub.publish(load)
+        if k == switch_k:                        # once, even if the rig repeats the tick
+            if not switching:
+                switching.append(k)
+                later = TwistStamped()
+                later.header.frame_id = answer.header.frame_id
+                later.header.stamp = m.header.stamp
+                later.twist.angular.z = float(speed_set[k])
+                switch_then_publish(later)
+            return
+        speed_pub.publish(answer)
 
-    depth = 10000
     node.create_subscription(TwistStamped, f"{RIG}/bit/twist", on_bit, depth)
     node.create_subscription(UInt8, f"{RIG}/bit/regime", lambda m: data["stuck"].__setitem__(
         len(data["stuck"]), float(m.data == 1)), depth)
@@ -163,6 +242,9 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
         pause = node.create_client(SetBool, f"{RIG}/pause")
         end = time.monotonic() + 60.0
         while not (pause.service_is_ready() and node.count_publishers(cmd_topic) > 0
+                   and hook_pub.get_subscription_count() > 0
+                   and (ctl is None or user_command or speed_pub.get_subscription_count() > 0)
+                   and (switch_k is None or switcher.service_is_ready())
                    and node.count_publishers(f"{RIG}/joint_states") > 0
                    and (ctl is None or node.count_subscribers(
                        f"{RIG}/measured/top_drive/motor_wrench") > 0)):
@@ -177,6 +259,8 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
         while min(len(v) for v in data.values()) < n:
             rclpy.spin_once(node, timeout_sec=0.05)
             _check_alive(procs)
+            if switched and not switched[0]:
+                raise OSError(f"the controller refused law = {settings.law} at switch-on")
             if time.monotonic() > end:
                 raise OSError(f"lockstep run stalled: {min(len(v) for v in data.values())} of "
                               f"{n} ticks after {timeout_s:g} s")
