@@ -44,6 +44,9 @@ SWITCH_INTERVAL_S = 5e-4
 SERVE_PERIOD_S = 1e-3        # max speed: services, parameters, diagnostics served this often
 # lockstep: served this often [s] (a spin of the executor costs ~0.1 ms, a third of a tick)
 LOCKSTEP_SERVE_PERIOD_S = 0.02
+# real time: which outputs have a subscriber is looked at this often (a publish to no one
+# still costs ~6 us, and there are 25 outputs); a new subscriber is served within it
+LIVE_REFRESH_PERIOD_S = 0.05
 
 
 class RigNode(Node):
@@ -65,7 +68,8 @@ class RigNode(Node):
         self.with_clock = bool(self.p["publish_clock"])
         self._enc = RigEncoders(self.with_clock)
         self._outputs = [self._publisher(t) for t in self._enc.topics]
-        self._set_live([True] * len(self._outputs))  # back to back: outputs with a subscriber
+        self._set_live([True] * len(self._outputs))  # then only the outputs with a subscriber
+        self._next_live_refresh = 0.0
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
         self.commands = CommandInbox(self, self.p["qos_reliability"])
         self.superseded = 0                      # commands replaced within their tick
@@ -145,6 +149,9 @@ class RigNode(Node):
         if ticks and self.advance(ticks):
             self.pacer.advanced(ticks)
             self.publish_sample(self.rig.sample())
+        if not self.pacer.max_speed and (now := time.monotonic()) >= self._next_live_refresh:
+            self._set_live([p.get_subscription_count() > 0 for p in self._outputs])
+            self._next_live_refresh = now + LIVE_REFRESH_PERIOD_S
 
     def advance(self, ticks: int) -> bool:
         """Advance the rig by exactly ``ticks`` ticks of 1/``rate_hz``; False (and paused) if
@@ -160,7 +167,8 @@ class RigNode(Node):
 
     def publish_sample(self, s: RigSample) -> None:
         """Measure the sample, encode both once; publish those bytes and record the very same
-        bytes (not recording, back to back, only the outputs with a subscriber are encoded).
+        bytes (only the outputs with a subscriber are published; not recording, only they are
+        encoded).
         In lockstep the rig then waits for this tick's commands.
 
         Not recording, the exact outputs are published before the sensors measure (every
