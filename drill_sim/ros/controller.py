@@ -30,6 +30,7 @@ from rcl_interfaces.msg import (
     SetParametersResult,
 )
 from rcl_interfaces.srv import SetParameters
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
@@ -87,7 +88,13 @@ def law_gain_defaults(law: str, impedance: float, inertia: float) -> dict[str, f
 class ControllerNode(Node):
     def __init__(self) -> None:
         super().__init__(NODE_NAME)
-        p = self._declare_all()
+        try:
+            p = self._declare_all()
+        except (InvalidParameterTypeException, InvalidParameterValueException) as exc:
+            raise SystemExit(f"{NODE_NAME}: {exc}") from None
+        if p["law"] not in CONTROL_LAWS:
+            raise SystemExit(f"{NODE_NAME}: law = {p['law']!r}: expected one of "
+                             f"{', '.join(CONTROL_LAWS)}")
         self.rig = p["rig"]
         try:
             self.core = Supervisor(p["sample_period_s"], p["impedance_nm_s_rad"],

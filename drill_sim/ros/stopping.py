@@ -8,15 +8,25 @@ so a tick is never published but not recorded, and a bag is always closed proper
 from __future__ import annotations
 
 import signal
+import sys
+from pathlib import Path
 
 import rclpy
+from rclpy._rclpy_pybind11 import RCLError
 from rclpy.signals import SignalHandlerOptions
 
 
 def init_stoppable(args: list[str] | None) -> list[int]:
     """``rclpy.init`` without its signal handlers; the returned list gets the number of each
     SIGINT or SIGTERM received (empty: keep going)."""
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except RCLError as exc:            # e.g. a --params-file that does not exist or parse
+        name = Path(sys.argv[0]).name
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        print(f"{name}: cannot start ROS: {why}; expected valid --ros-args (a --params-file "
+              "that exists and parses, name:=value remappings)", file=sys.stderr)
+        raise SystemExit(2) from None
     stop: list[int] = []
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda signum, frame: stop.append(signum))

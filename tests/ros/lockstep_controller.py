@@ -24,6 +24,7 @@ from geometry_msgs.msg import TwistStamped
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
 from std_srvs.srv import SetBool
 
 
@@ -91,7 +92,9 @@ def main() -> int:
     parser.add_argument("--resume", action="store_true")
     parser.add_argument("--executor", choices=("events", "single"), default="events")
     args = parser.parse_args()
-    rclpy.init()
+    # Ctrl-C is a KeyboardInterrupt between callbacks, not rclpy shutting the context down
+    # under a callback that is publishing: the controller stops cleanly and says what it did
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = BitSpeedPI(args)
     executor = EventsExecutor() if args.executor == "events" else SingleThreadedExecutor()
     executor.add_node(node)
@@ -108,11 +111,11 @@ def main() -> int:
         print("connected", flush=True)
         while not args.ticks or not node.done:
             executor.spin_once(timeout_sec=0.1)
-        print(f"answered {node.answered} in {node.last_wall - node.first_wall:.6f} s",
-              flush=True)
     except KeyboardInterrupt:
         pass
     finally:
+        print(f"answered {node.answered} in {node.last_wall - node.first_wall:.6f} s",
+              flush=True)
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()

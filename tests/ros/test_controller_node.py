@@ -5,6 +5,7 @@ and reports law, saturation and wind-up on /diagnostics."""
 
 from __future__ import annotations
 
+import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
@@ -80,3 +81,18 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
         wait_for(lambda: _mode(ros) == "speed", ros, 10.0, "the drive back on its own loop")
         code, out = ctl.stop()
         assert code == 0, out
+
+
+@pytest.mark.parametrize("program, args, fragment", [
+    ("drill_sim_controller", ("-p", "law:=nosuch"), "law = 'nosuch': expected one of stiff_pi"),
+    ("drill_sim_controller", ("-p", "enabled:=maybe"), "expecting type 'BOOL'"),
+    ("drill_sim_controller", ("--params-file", "nosuch.yaml"), "cannot start ROS"),
+    ("drill_sim_node", ("--params-file", "nosuch.yaml"), "cannot start ROS"),
+])
+def test_bad_start_is_a_clear_line_and_status_2(program, args, fragment):
+    """A bad law, a value of the wrong type or a params file that is not there: the reason in
+    one line of ours (rcl may log its own before it), exit status 2, no traceback."""
+    proc = NodeProcess(program, "--ros-args", *args)
+    code = proc.proc.wait(timeout=60)
+    out = proc.proc.stdout.read()
+    assert code == 2 and fragment in out and "Traceback" not in out, out
