@@ -103,6 +103,7 @@ class Player(Node):
         clock_period = 1.0 / self.options.clock_hz if self.options.clock_hz else math.inf
         first: int | None = None
         wall0 = next_clock = 0.0
+        last_clock = 0.0                            # the last /clock of this pass [ns]
         publishers = self.publishers_by_topic
         problems: list[str] = []
         for scan in self.bag.scans(problems):
@@ -119,8 +120,10 @@ class Player(Node):
                 due = wall0 + (log - first) * 1e-9 / rate
                 while True:                         # wait, keeping /clock going
                     now = time.monotonic()
-                    if now >= next_clock:
-                        self._publish_clock(first + (now - wall0) * rate * 1e9)
+                    if now >= next_clock:   # never past the message about to go out (a
+                        # late wake-up must not put /clock beyond the recorded times), never back
+                        last_clock = max(last_clock, min(first + (now - wall0) * rate * 1e9, log))
+                        self._publish_clock(last_clock)
                         next_clock = now + clock_period
                     if now >= due or stop:
                         break
