@@ -9,7 +9,6 @@ import argparse
 import math
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import time
@@ -66,6 +65,7 @@ def run(args: argparse.Namespace) -> int:
     from rclpy.executors import SingleThreadedExecutor
 
     from ..ros.monitor import Monitor
+    from ..ros.stopping import stop_processes
 
     if args.no_record and args.record is not None:
         raise UsageError(f"--no-record with --record {args.record}: they contradict each other; "
@@ -116,14 +116,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if tty:
             print()
-        for p in procs:
-            if p.poll() is None:
-                p.send_signal(signal.SIGINT)
-        for p in procs:
-            try:
-                p.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                p.kill()
+        stop_processes(procs)
         received = monitor.series()
         executor.shutdown()
         monitor.destroy_node()

@@ -24,7 +24,6 @@ from __future__ import annotations
 import math
 import os
 import shlex
-import signal
 import subprocess
 import sys
 import time
@@ -144,6 +143,8 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
     from sensor_msgs.msg import JointState
     from std_msgs.msg import UInt8
     from std_srvs.srv import SetBool
+
+    from .stopping import stop_processes
 
     check_ros(scenario, user_command=user_command)
     speed_set, hook = tick_commands(preset, scenario, settings)
@@ -270,14 +271,7 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
                 progress(min(got / n, 1.0))
         del future
     finally:
-        for p in procs:
-            if p.poll() is None:
-                p.send_signal(signal.SIGINT)
-        for p in procs:
-            try:
-                p.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                p.kill()
+        stop_processes(procs)
         node.destroy_node()
         if owns:
             rclpy.try_shutdown()

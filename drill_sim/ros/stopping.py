@@ -8,6 +8,7 @@ so a tick is never published but not recorded, and a bag is always closed proper
 from __future__ import annotations
 
 import signal
+import subprocess
 import sys
 from pathlib import Path
 
@@ -31,3 +32,17 @@ def init_stoppable(args: list[str] | None) -> list[int]:
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda signum, frame: stop.append(signum))
     return stop
+
+
+def stop_processes(procs: list[subprocess.Popen], timeout_s: float = 10.0) -> None:
+    """Ask each child still running to stop (SIGINT: it stops at its next safe point, so its
+    bag is closed properly), then wait for each; one that has not ended in ``timeout_s`` [s]
+    is killed."""
+    for p in procs:
+        if p.poll() is None:
+            p.send_signal(signal.SIGINT)
+    for p in procs:
+        try:
+            p.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            p.kill()
