@@ -8,7 +8,7 @@ the gaps between consecutive joint_states arrivals during the flood, the diagnos
 the node's command counters, and whether a command sent after the flood was applied.
 
 Run: .venv/bin/python benchmarks/bench_flood.py [--count 100000] [--record]
-The same script publishes the flood when started with --publish (that is how it runs it).
+The flood is published by tests/ros/flood_commands.py, the flooder the node's flood test uses.
 """
 
 from __future__ import annotations
@@ -26,50 +26,25 @@ from pathlib import Path
 import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import TwistStamped, WrenchStamped
+from geometry_msgs.msg import TwistStamped
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rclpy.serialization import serialize_message
 from sensor_msgs.msg import JointState
 
 BIN = Path(sys.executable).parent
 NS = "/flood"
 RIG = f"{NS}/drill_sim"
+# the flooder the tests use: both topics, pre-serialized, as fast as one process goes
+FLOODER = Path(__file__).resolve().parents[1] / "tests" / "ros" / "flood_commands.py"
 QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-
-
-def publish(count: int) -> None:
-    """The flooder: ``count`` commands on each command topic, alternating, back to back
-    (pre-serialized: one process publishes 50-70 000 a second so)."""
-    rclpy.init()
-    node = rclpy.create_node("drill_sim_flood")
-    speed = node.create_publisher(TwistStamped, f"{RIG}/cmd/top_drive", QOS)
-    hook = node.create_publisher(WrenchStamped, f"{RIG}/cmd/hook_load", QOS)
-    while not (speed.get_subscription_count() and hook.get_subscription_count()):
-        time.sleep(0.01)
-    s, h = TwistStamped(), WrenchStamped()
-    s.header.frame_id = h.header.frame_id = "top_drive"
-    s.twist.angular.z, h.wrench.force.z = 3.0, 238e3
-    raw_speed, raw_hook = serialize_message(s), serialize_message(h)   # as fast as it goes
-    start = time.monotonic()
-    for _ in range(count):
-        speed.publish(raw_speed)
-        hook.publish(raw_hook)
-    print(f"flood: {2 * count} commands in {time.monotonic() - start:.2f} s", flush=True)
-    node.destroy_node()
-    rclpy.shutdown()
 
 
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--count", type=int, default=100_000, help="commands per topic")
     parser.add_argument("--record", action="store_true", help="the node records its session")
-    parser.add_argument("--publish", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    if args.publish:
-        publish(args.count)
-        return
     tmp = tempfile.TemporaryDirectory()
     record = ("-p", f"record:={tmp.name}/bag") if args.record else ()
     node_proc = subprocess.Popen([str(BIN / "drill_sim_node"), "--ros-args", "-r",
@@ -87,8 +62,8 @@ def main() -> None:
         if s.hardware_id and s.name.startswith("drill_sim")), 100)
     while len(arrivals) < 2000:
         rclpy.spin_once(node, timeout_sec=0.01)
-    flooder = subprocess.Popen([sys.executable, __file__, "--publish", "--count",
-                                str(args.count)], stdout=subprocess.PIPE, text=True)
+    flooder = subprocess.Popen([sys.executable, str(FLOODER), RIG, str(args.count)],
+                               stdout=subprocess.PIPE, text=True)
     start = time.monotonic()
     while flooder.poll() is None:
         rclpy.spin_once(node, timeout_sec=0.001)
