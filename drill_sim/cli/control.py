@@ -128,7 +128,8 @@ def run(args: argparse.Namespace) -> int:
     settings = []
     for law in laws:
         law_gains = {} if args.published_gains else reference_gains(
-            law, preset, drive.top_drive_inertia_kg_m2)
+            law, preset, drive.top_drive_inertia_kg_m2, string_model=args.string_model,
+            sensor_profile=args.sensor_profile)
         law_gains.update(gains.get(law, {}))
         one = LoopSettings(law=law, gains=law_gains, sample_period_s=h, top_drive=drive,
                            string_model=args.string_model, sensor_profile=args.sensor_profile,

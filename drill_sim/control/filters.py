@@ -80,3 +80,64 @@ class FilteredDerivative:
 
     def step(self, x: float) -> float:
         return self._wc * self._hpf.step(x)
+
+
+class HeldLag:
+    """A first-order lag of time constant ``tau_s`` for an input held between samples, exact:
+    y_k = x_{k-1} + (y_{k-1} - x_{k-1}) exp(-h/τ) -- the filter the rig's sensor model
+    applies (``core.sensors``), so a law can pass one signal through another's filter.
+    τ = 0: the identity."""
+
+    __slots__ = ("decay", "tau_s", "x1", "y1")
+
+    def __init__(self, tau_s: float, h_s: float, *, name: str = "tau_s") -> None:
+        self.tau_s = check_number(name, tau_s, low_inclusive=True, high=10.0)
+        self.decay = math.exp(-h_s / self.tau_s) if self.tau_s > 0.0 else 0.0
+        self.x1 = self.y1 = 0.0
+
+    def settle(self, x: float) -> None:
+        self.x1 = self.y1 = x
+
+    def step(self, x: float) -> float:
+        if self.tau_s == 0.0:
+            return x
+        y = self.x1 + (self.y1 - self.x1) * self.decay
+        self.x1, self.y1 = x, y
+        return y
+
+
+class SampleWindow:
+    """The last ``n`` samples of a signal, in a fixed ring: their mean and the change over them.
+
+    A signal that updates every n law samples (a 100 Hz drive signal read at 1 kHz) is a
+    staircase: its mean over n samples is its linear interpolation, and its change over n
+    samples divided by n h is the slope of that interpolation, so a torque and a speed that
+    both come as such staircases stay aligned in time after ``mean`` and ``slope``."""
+
+    __slots__ = ("h_s", "i", "n", "ring", "total")
+
+    def __init__(self, n: int, h_s: float) -> None:
+        self.n, self.h_s = n, h_s
+        self.ring = [0.0] * n
+        self.i = 0
+        self.total = 0.0
+
+    def settle(self, x: float) -> None:
+        self.ring[:] = [x] * self.n
+        self.i = 0
+        self.total = x * self.n
+
+    def push(self, x: float) -> float:
+        """Add ``x``; return the value it replaces (the one n samples ago)."""
+        old = self.ring[self.i]
+        self.ring[self.i] = x
+        self.i += 1
+        if self.i == self.n:               # once a round: the sum afresh (no drift)
+            self.i = 0
+            self.total = math.fsum(self.ring)
+        else:
+            self.total += x - old
+        return old
+
+    def mean(self) -> float:
+        return self.total / self.n

@@ -1,4 +1,5 @@
-"""The reference tunings the evaluation scores each law with, derived from the string.
+"""The reference tunings the evaluation scores each law with, derived from the string, the drive
+and the signals the law reads.
 
 The laws' own defaults are those of the NORCE Simulator4nDOF, chosen for long strings (first
 mode ≈ 0.2 Hz) and a 10 ms loop. On a short string the first mode is faster (base: 0.76 Hz)
@@ -15,25 +16,42 @@ the node's rates"):
   with little lag: corner 25 f₁ (19 Hz on base, against 5 Hz by default). J_c = 0.95 J_TD,
   f_t = f₁.
 
-f₁ is the lumped first torsional mode with the top's inertia (``first_mode_frequency_hz``).
+Z-Torque's pipe-torque estimate T_m − J_TD dΩ/dt is fed back with a gain α K_p/Z ≈ 140, so its
+two signals must reach it aligned (``z_torque``): with a sensor profile, the law is told what
+the drive's signals are -- how often they update (the slower of the speed's and the motor
+torque's rates) and each one's first-order filter -- as an engineer reads them off the drive's
+data sheet. When the speed signal is noisy the torque low-pass comes down to 2 f₁ (1.5 Hz on
+base: 2.4 times less motor-torque noise for 20° more lag at the mode).
+
+f₁ is the first torsional mode with the top's inertia (``first_mode_frequency_hz``), of the
+string model the law will run on: lumped √(C(1/I + 1/J_TD)), or the distributed pipe's own
+frequency equation (base: 0.76 and 0.57 Hz).
 """
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 from ..core.presets import Preset
+from ..core.sensor_profile import SensorProfile, load_profile
 from .tuning import first_mode_frequency_hz, pipe_impedance
 
 COMPENSATED_FRACTION = 0.95       # J_c / J_TD of the reference SoftSpeed
 DERIVATIVE_CORNER_PER_MODE = 25.0  # SoftSpeed's derivative corner / f₁
 Z_TORQUE_ALPHA = 0.5               # the reference Z-Torque's α
 STIFFNESS_AT_MODE = 6.0           # Z-Torque: K_p / (J_TD ω₁), at least
+NOISY_TORQUE_LOWPASS_PER_MODE = 2.0   # Z-Torque's LPF_T / f₁ when the speed signal is noisy
 
 
-def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float) -> dict[str, float]:
-    """Gains of ``law`` tuned for this string and drive (empty: the law's defaults)."""
-    f1 = first_mode_frequency_hz(preset, top_drive_inertia_kg_m2)
+def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
+                    string_model: str = "lumped",
+                    sensor_profile: str | Path | SensorProfile | None = None
+                    ) -> dict[str, float]:
+    """Gains of ``law`` tuned for this string and drive, and (Z-Torque) for the signals of
+    ``sensor_profile`` (None or ``ideal``: exact signals every sample); empty: the law's
+    defaults."""
+    f1 = first_mode_frequency_hz(preset, top_drive_inertia_kg_m2, string_model=string_model)
     z = pipe_impedance(preset)
     if law == "soft_speed":
         return {"tuning_frequency_hz": f1,
@@ -41,5 +59,29 @@ def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float) ->
                 "derivative_corner_hz": DERIVATIVE_CORNER_PER_MODE * f1}
     if law == "z_torque":
         stiff = STIFFNESS_AT_MODE * top_drive_inertia_kg_m2 * 2.0 * math.pi * f1
-        return {"kp_nm_s_rad": max(50.0 * z, stiff), "alpha": Z_TORQUE_ALPHA}
+        return {"kp_nm_s_rad": max(50.0 * z, stiff), "alpha": Z_TORQUE_ALPHA,
+                **signal_alignment(sensor_profile, f1)}
     return {}
+
+
+def signal_alignment(sensor_profile: str | Path | SensorProfile | None,
+                     first_mode_hz: float) -> dict[str, float]:
+    """Z-Torque's gains that say what its speed and motor-torque signals are: their update
+    period and each one's filter; and a lower torque low-pass if the speed is noisy."""
+    if sensor_profile is None:
+        return {}
+    profile = (sensor_profile if isinstance(sensor_profile, SensorProfile)
+               else load_profile(sensor_profile))
+    speed = profile.channels["top_drive_speed_rad_s"]
+    torque = profile.channels["motor_torque_nm"]
+    out = {}
+    period = max(speed.period_s, torque.period_s)
+    if period > 0.0:
+        out["measurement_period_s"] = period
+    if torque.filter_tau_s > 0.0:
+        out["torque_signal_tau_s"] = torque.filter_tau_s
+    if speed.filter_tau_s > 0.0:
+        out["speed_signal_tau_s"] = speed.filter_tau_s
+    if speed.noise_std > 0.0:
+        out["torque_lowpass_hz"] = NOISY_TORQUE_LOWPASS_PER_MODE * first_mode_hz
+    return out

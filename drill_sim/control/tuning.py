@@ -52,11 +52,16 @@ def pipe_impedance(source: Preset | StringGeometry | str) -> float:
 
 
 def first_mode_frequency_hz(source: Preset | RigParameters | str,
-                            top_drive_inertia_kg_m2: float | None = None) -> float:
-    """Lumped first torsional mode [Hz]: √(C(1/I + 1/J_TD))/(2π), or √(C/I)/(2π) if kinematic.
+                            top_drive_inertia_kg_m2: float | None = None, *,
+                            string_model: str = "lumped") -> float:
+    """The string's first torsional mode [Hz], off bottom, the f_t a SoftSpeed tuned from the
+    model would use. ``top_drive_inertia_kg_m2=None`` means a kinematic top drive (speed
+    imposed, infinite inertia).
 
-    ``top_drive_inertia_kg_m2=None`` means a kinematic top drive (speed imposed, infinite
-    inertia). This is the f_t a SoftSpeed tuned from the model would use.
+    ``lumped``: √(C(1/I + 1/J_TD))/(2π), or √(C/I)/(2π) if kinematic. ``distributed``: the
+    lowest root of the pipe's frequency equation with the BHA at the bottom and the drive's
+    inertia at the top (``core.stability_distributed.natural_frequencies``; needs a preset's
+    pipe geometry) -- the pipe's own inertia lowers it (base: 0.70 against 0.76 Hz).
     """
     if isinstance(source, str):
         source = load_preset(source)
@@ -64,10 +69,24 @@ def first_mode_frequency_hz(source: Preset | RigParameters | str,
     if not isinstance(rig, RigParameters):
         raise ParameterError(f"expected a Preset, RigParameters or preset name, got "
                              f"{type(source).__name__}")
+    if top_drive_inertia_kg_m2 is not None:
+        top_drive_inertia_kg_m2 = check_number("top_drive_inertia_kg_m2",
+                                               top_drive_inertia_kg_m2)
+    if string_model == "distributed":
+        from ..core.distributed import geometry_waves
+        from ..core.simulator import DEFAULT_DT
+        from ..core.stability_distributed import natural_frequencies
+        waves = geometry_waves(rig, _geometry(source), DEFAULT_DT)
+        top = (math.inf if top_drive_inertia_kg_m2 is None
+               else top_drive_inertia_kg_m2 / rig.bha_inertia_kg_m2)
+        torsional, _ = natural_frequencies(waves, rig.groups.psi, 1, top_inertia=top)
+        return float(torsional[0]) / (2.0 * math.pi * rig.scales.time_s)
+    if string_model != "lumped":
+        raise ParameterError(f"string_model = {string_model!r}: expected lumped or distributed")
     c, inertia = rig.torsional_stiffness_nm_per_rad, rig.bha_inertia_kg_m2
     inverse = 1.0 / inertia
     if top_drive_inertia_kg_m2 is not None:
-        inverse += 1.0 / check_number("top_drive_inertia_kg_m2", top_drive_inertia_kg_m2)
+        inverse += 1.0 / top_drive_inertia_kg_m2
     return math.sqrt(c * inverse) / (2.0 * math.pi)
 
 

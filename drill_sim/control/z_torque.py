@@ -5,43 +5,62 @@ up the string, like more pipe: the wave is absorbed instead of reflected. Z-Torq
 with a stiff speed PI whose error carries a torque term (as in the NORCE Simulator4nDOF):
 
     ω̂  = LPF_ω(Ω_TD)
-    T̂_p = LPF_T(T_m) - J_TD · LPF_T(dΩ_TD/dt)      estimated torque in the pipe at the top
+    T̂_p = LPF_T(T_m - J_TD · dΩ_TD/dt)             estimated torque in the pipe at the top
     T̃  = LPF_T(HPF(T̂_p))                           its dynamic part
     e   = Ω_set - ω̂ - α T̃ / Z,   T_m = PI(e)
 
 α (default 0.25) scales the match: the top then looks like Z/α to the pipe at the stick-slip
 frequency, reflecting (α-1)/(α+1) of a speed wave (-0.6) where the stiff drive reflects -0.96.
 
+The estimate is a difference of two large signals (T_m and J_TD dΩ/dt nearly cancel), fed back
+with the gain α K_p / Z (≈ 140 when the drive is stiff at the base string's mode), so the two
+must reach it aligned in time, or what is left of T_m closes a loop of its own. Aligned means:
+
+- the speed's change over one sample against the torque applied over that sample (a backward
+  difference, (Ω_k - Ω_k-1)/h, not a bilinear derivative, which is half a sample off: with
+  100 Hz signals that alone drove the motor torque from limit to limit at 2 Hz);
+- signals that update every ``measurement_period_s`` (a drive's 100 Hz signals read at 1 kHz)
+  taken as the staircases they are: the torque's mean and the speed's change over that period
+  (``filters.SampleWindow``);
+- each signal through the other's filter too (``torque_signal_tau_s``, ``speed_signal_tau_s``:
+  the first-order lag the drive puts on each), so both have passed the same chain.
+
 Filters (``filters`` module: prewarped Tustin sections, corners exact at any sample rate):
 LPF_ω 10 Hz, LPF_T 2.5 Hz, HPF 0.05 Hz. The HPF removes the mean drilling torque (which the PI's
-integral carries) so that only oscillations are fed back; the two LPF_T stages keep the
-differentiated speed's noise small: white speed noise σ sampled at f_s gives T̂_p a noise below
-J_TD ωc σ (ωc = 2π·2.5 Hz, the filtered derivative's largest gain) and T̃ about
-J_TD σ √(ωc³/(4 f_s)) -- 28 N·m for 0.01 rad/s at 1 kHz, against J_TD √2 σ/h = 41 kN·m for a
-raw difference. The corners suit stick-slip at 0.1-0.76 Hz (the T path's phase within 30° of
-zero); keep ``torque_lowpass_hz`` at least three times the stick-slip frequency.
+integral carries) so that only oscillations are fed back; LPF_T bounds what the difference does
+to speed noise: white noise σ sampled at f_s gives T̂_p a noise below J_TD ωc σ (ωc = 2π·2.5 Hz)
+and T̃ about J_TD σ √(ωc³/(4 f_s)) -- 28 N·m for 0.01 rad/s at 1 kHz, against
+J_TD √2 σ/h = 41 kN·m for the bare difference. The corners suit stick-slip at 0.1-0.76 Hz (the
+T path's phase within 30° of zero); keep ``torque_lowpass_hz`` at least three times the
+stick-slip frequency.
 """
 
 from __future__ import annotations
 
 from ..core.parameters import ParameterError, check_number
-from .filters import FilteredDerivative, FirstOrderSection
+from .filters import FirstOrderSection, HeldLag, SampleWindow
 from .laws import DEFAULT_TORQUE_LIMIT_NM, PI, Law, SurfaceMeasurement
+
+MAX_MEASUREMENT_PERIOD_S = 1.0    # signals slower than this are no drive's speed and torque
 
 
 class ZTorque(Law):
     """Z-Torque: a stiff speed PI on e = Ω_set - ω̂ - α T̃/Z (see the module docstring)."""
 
-    __slots__ = ("alpha", "derivative", "highpass", "lowpass_out", "lowpass_speed",
-                 "lowpass_torque", "pi", "pipe_torque_estimate_nm", "torque_feedback_nm")
+    __slots__ = ("alpha", "highpass", "lowpass_out", "lowpass_speed", "lowpass_torque",
+                 "measurement_period_s", "pi", "pipe_torque_estimate_nm", "speed_lag",
+                 "speed_window", "torque_feedback_nm", "torque_lag", "torque_window")
     name = "z_torque"
     GAINS = ("alpha", "kp_nm_s_rad", "ki_nm_rad", "speed_lowpass_hz", "torque_lowpass_hz",
-             "highpass_hz", "torque_min_nm", "torque_max_nm")
+             "highpass_hz", "measurement_period_s", "torque_signal_tau_s",
+             "speed_signal_tau_s", "torque_min_nm", "torque_max_nm")
 
     def __init__(self, h_s: float, impedance_nm_s_rad: float, top_drive_inertia_kg_m2: float, *,
                  alpha: float = 0.25, kp_nm_s_rad: float | None = None,
                  ki_nm_rad: float | None = None, speed_lowpass_hz: float = 10.0,
                  torque_lowpass_hz: float = 2.5, highpass_hz: float = 0.05,
+                 measurement_period_s: float = 0.0, torque_signal_tau_s: float = 0.0,
+                 speed_signal_tau_s: float = 0.0,
                  torque_min_nm: float = -DEFAULT_TORQUE_LIMIT_NM,
                  torque_max_nm: float = DEFAULT_TORQUE_LIMIT_NM) -> None:
         super().__init__(h_s, impedance_nm_s_rad, top_drive_inertia_kg_m2)
@@ -52,7 +71,15 @@ class ZTorque(Law):
         h = self.h_s
         self.lowpass_speed = FirstOrderSection(speed_lowpass_hz, h, name="speed_lowpass_hz")
         self.lowpass_torque = FirstOrderSection(torque_lowpass_hz, h, name="torque_lowpass_hz")
-        self.derivative = FilteredDerivative(torque_lowpass_hz, h, name="torque_lowpass_hz")
+        period = check_number("measurement_period_s", measurement_period_s,
+                              low_inclusive=True, high=MAX_MEASUREMENT_PERIOD_S)
+        n = max(1, round(period / h)) if period > 0.0 else 1
+        self.measurement_period_s = n * h        # whole samples; 0 given: every sample
+        self.torque_window = SampleWindow(n, h)
+        self.speed_window = SampleWindow(n, h)
+        # each signal through the other's filter: the speed through the torque signal's lag
+        self.speed_lag = HeldLag(torque_signal_tau_s, h, name="torque_signal_tau_s")
+        self.torque_lag = HeldLag(speed_signal_tau_s, h, name="speed_signal_tau_s")
         self.highpass = FirstOrderSection(highpass_hz, h, highpass=True, name="highpass_hz")
         self.lowpass_out = FirstOrderSection(torque_lowpass_hz, h, name="torque_lowpass_hz")
         if self.highpass.corner_hz >= self.lowpass_torque.corner_hz:
@@ -65,7 +92,10 @@ class ZTorque(Law):
     def _settle(self, speed_rad_s: float, motor_torque_nm: float) -> None:
         self.lowpass_speed.settle(speed_rad_s)
         self.lowpass_torque.settle(motor_torque_nm)
-        self.derivative.settle(speed_rad_s)
+        self.speed_lag.settle(speed_rad_s)
+        self.torque_lag.settle(motor_torque_nm)
+        self.speed_window.settle(speed_rad_s)
+        self.torque_window.settle(motor_torque_nm)
         self.highpass.settle(motor_torque_nm)
         self.lowpass_out.settle(0.0)
         self.pipe_torque_estimate_nm = motor_torque_nm
@@ -79,8 +109,12 @@ class ZTorque(Law):
     def step(self, measurement: SurfaceMeasurement) -> float:
         speed = measurement.top_drive_speed_rad_s
         speed_hat = self.lowpass_speed.step(speed)
-        t_p = (self.lowpass_torque.step(measurement.motor_torque_nm)
-               - self.top_drive_inertia_kg_m2 * self.derivative.step(speed))
+        aligned = self.speed_lag.step(speed)
+        self.torque_window.push(self.torque_lag.step(measurement.motor_torque_nm))
+        before = self.speed_window.push(aligned)
+        slope = (aligned - before) / self.measurement_period_s     # dΩ/dt over the period
+        t_p = self.lowpass_torque.step(self.torque_window.mean()
+                                       - self.top_drive_inertia_kg_m2 * slope)
         t_tilde = self.lowpass_out.step(self.highpass.step(t_p))
         self.pipe_torque_estimate_nm = t_p
         self.torque_feedback_nm = t_tilde

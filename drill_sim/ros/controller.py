@@ -29,7 +29,7 @@ from rcl_interfaces.msg import (
     ParameterValue,
     SetParametersResult,
 )
-from rcl_interfaces.srv import SetParameters
+from rcl_interfaces.srv import GetParameters, SetParameters
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
@@ -50,6 +50,8 @@ NODE_NAME = "drill_sim_controller"
 CONTROL_LAWS = tuple(n for n in LAWS if n != "kinematic")
 DEFAULT_TORQUE_LIMIT_NM = 60e3            # the base drive's rating; set to the rig's limits
 MAX_CATCH_UP = 100                        # law steps for one sample after a gap in the stamps
+PROVISIONAL_PERIOD_S = 1e-3               # gains are checked against it until the rig answers
+RATE_QUERY_PERIOD_S = 0.1                 # the rig's rate_hz is asked this often until known
 # (input, measured topic, exact topic): the rig's names, from its table
 INPUTS = (("speed", "~/measured/top_drive/twist", "~/top_drive/twist"),
           ("motor", "~/measured/top_drive/motor_wrench", "~/top_drive/motor_wrench"),
@@ -96,13 +98,23 @@ class ControllerNode(Node):
             raise SystemExit(f"{NODE_NAME}: law = {p['law']!r}: expected one of "
                              f"{', '.join(CONTROL_LAWS)}")
         self.rig = p["rig"]
-        try:
-            self.core = Supervisor(p["sample_period_s"], p["impedance_nm_s_rad"],
-                                   p["top_drive_inertia_kg_m2"], p["law"], self._gains(p["law"]),
-                                   enabled=p["enabled"],
-                                   speed_set_rad_s=p["initial_speed_setpoint_rad_s"])
-        except ParameterError as exc:
-            raise SystemExit(f"{NODE_NAME}: {exc}") from None
+        self._p = p
+        period = p["sample_period_s"]
+        if not (isinstance(period, float) and math.isfinite(period) and 0.0 <= period <= 1.0):
+            raise SystemExit(f"{NODE_NAME}: sample_period_s = {period!r}: expected 0 (the "
+                             "rig's 1/rate_hz, read from it) or a period in seconds up to 1")
+        # Until the rig says its rate, the gains are checked against a provisional period and
+        # samples wait (the latest complete one is stepped as soon as the period is known).
+        self.core = self._supervisor(period or PROVISIONAL_PERIOD_S, p["enabled"],
+                                     p["initial_speed_setpoint_rad_s"])
+        self._period_known = period > 0.0
+        self._deferred: tuple | None = None
+        if not self._period_known:
+            self._rate_client = self.create_client(GetParameters, f"{self.rig}/get_parameters")
+            self._rate_future = None
+            self._rate_timer = self.create_timer(RATE_QUERY_PERIOD_S, self._ask_rate)
+            self.get_logger().info(f"waiting for {self.rig}'s rate_hz (sample_period_s 0: "
+                                   "the law steps once a rig tick)")
         if p["inputs"] not in ("measured", "exact"):
             raise SystemExit(f"{NODE_NAME}: inputs = {p['inputs']!r}: expected measured or exact")
         use = 1 if p["inputs"] == "measured" else 2
@@ -144,7 +156,8 @@ class ControllerNode(Node):
             ("rig", rig_topics.NODE_NAME, "the rig node's name (e.g. /rig1/drill_sim)"),
             ("law", "z_torque", f"one of {', '.join(CONTROL_LAWS)}"),
             ("enabled", True, "false: publish nothing; true again: take over bumplessly"),
-            ("sample_period_s", 1e-3, "the law's h [s]: the rig's 1/rate_hz"),
+            ("sample_period_s", 0.0, "the law's h [s]; 0: the rig's 1/rate_hz, read from its "
+                                     "parameters at start"),
             ("impedance_nm_s_rad", pipe_impedance("base"),
              "the pipe's Z = J_p sqrt(G rho) [N m s/rad]; default the base pipe's"),
             ("top_drive_inertia_kg_m2", 2900.0, "J_TD [kg m^2], as the rig's"),
@@ -170,6 +183,47 @@ class ControllerNode(Node):
                 self.declare_parameter(f"{law}.{gain}", default,
                                        d(description=f"{law}: {gain} (msg_docs/control.md)"))
         return values
+
+    def _supervisor(self, h_s: float, enabled: bool, speed_set_rad_s: float) -> Supervisor:
+        """The law of the current parameters at period ``h_s``; a bad gain ends the node."""
+        p = self._p
+        law = str(self.get_parameter("law").value)
+        try:
+            return Supervisor(h_s, p["impedance_nm_s_rad"], p["top_drive_inertia_kg_m2"], law,
+                              self._gains(law), enabled=enabled, speed_set_rad_s=speed_set_rad_s)
+        except ParameterError as exc:
+            raise SystemExit(f"{NODE_NAME}: {exc}") from None
+
+    def _ask_rate(self) -> None:
+        """Ask the rig its rate_hz until it answers; then the law at h = 1/rate_hz."""
+        if self._period_known or self._rate_future is not None:
+            return
+        if not self._rate_client.service_is_ready():
+            return
+        self._rate_future = self._rate_client.call_async(
+            GetParameters.Request(names=["rate_hz"]))
+        self._rate_future.add_done_callback(self._on_rate)
+
+    def _on_rate(self, future) -> None:
+        self._rate_future = None
+        result = future.result()
+        values = [] if result is None else result.values
+        rate = values[0].double_value if values and values[0].type == \
+            ParameterType.PARAMETER_DOUBLE else math.nan
+        if not (math.isfinite(rate) and rate > 0.0):
+            self.get_logger().warning(f"{self.rig} gave no usable rate_hz ({rate!r}); asking "
+                                      "again", throttle_duration_sec=5.0)
+            return
+        old = self.core
+        self.core = self._supervisor(1.0 / rate, old.enabled, old.speed_set_rad_s)
+        self._period_known = True
+        self._rate_timer.cancel()
+        self.get_logger().info(f"{self.rig} ticks at {rate:g} Hz: the law's h = "
+                               f"{1.0 / rate:g} s")
+        if self._deferred is not None:
+            stamp, slot = self._deferred
+            self._deferred = None
+            self._sample(stamp, slot)
 
     def _gains(self, law: str, changed: dict[str, object] | None = None) -> dict[str, float]:
         changed = changed or {}
@@ -257,6 +311,15 @@ class ControllerNode(Node):
         del self._pending[stamp]
         for old in [s for s in self._pending if s < stamp]:
             del self._pending[old]
+        if not self._period_known:            # kept until the rig says its rate
+            self._deferred = (msg.header.stamp, slot)
+            return
+        self._sample(msg.header.stamp, slot)
+
+    def _sample(self, stamp_msg, slot: list) -> None:
+        """One complete sample (speed, motor torque, surface torque[, set-point]): step the
+        law and publish its command stamped with the sample's stamp."""
+        stamp = stamp_msg.sec * 1_000_000_000 + stamp_msg.nanosec
         speed, motor, surface = slot[:3]
         if not all(math.isfinite(v) for v in slot):
             self.get_logger().warn(f"sample at {stamp * 1e-9:.3f} s skipped: non-finite input")
@@ -266,7 +329,7 @@ class ControllerNode(Node):
         m = SurfaceMeasurement(stamp * 1e-9, speed, motor, surface)
         if self._last is not None and m.time_s == self._last.time_s:
             if self.core.last_output is not None and self.core.enabled:   # a tick published
-                self._publish(msg.header.stamp, self.core.last_output)    # again: same answer
+                self._publish(stamp_msg, self.core.last_output)           # again: same answer
             return
         # The law runs on sim time: when the rig skipped ticks (real time on a busy machine)
         # the law is stepped once per period h of the gap on measurements interpolated
@@ -281,7 +344,7 @@ class ControllerNode(Node):
                                                                                 strict=True))))
         out = self.core.step(m)
         if out is not None:
-            self._publish(msg.header.stamp, out)
+            self._publish(stamp_msg, out)
 
     def _publish(self, stamp, torque_nm: float) -> None:
         self.msg.header.stamp = stamp
@@ -291,7 +354,9 @@ class ControllerNode(Node):
     def _diagnose(self) -> None:
         w = self.core.take_window()
         level, text = DiagnosticStatus.OK, "controlling"
-        if not self.core.enabled:
+        if not self._period_known:
+            level, text = DiagnosticStatus.WARN, f"waiting for {self.rig}'s rate_hz"
+        elif not self.core.enabled:
             text = "disabled"
         elif w["samples"] == 0:
             level, text = DiagnosticStatus.WARN, "no samples: the rig's inputs are not arriving"
@@ -299,6 +364,7 @@ class ControllerNode(Node):
             level, text = DiagnosticStatus.WARN, "output saturated"
         law = self.core.law
         values = {"law": law.name, "enabled": str(self.core.enabled),
+                  "sample_period_s": f"{self.core.h_s:.9g}" if self._period_known else "",
                   "samples": str(w["samples"]),
                   "saturation_fraction": f"{w['saturation_fraction']:.4f}",
                   "windup_fraction": f"{w['windup_fraction']:.4f}",

@@ -83,6 +83,24 @@ def test_z_torque_without_its_torque_feedback_is_the_stiff_drive(preset):
     assert r.stick_fraction > 0.2
 
 
+def test_z_torque_told_the_rig_s_signals_clears_stick_slip_through_them(preset):
+    """With ``surface_rig`` (100 Hz, 10 ms late, noisy, the torque filtered): the reference
+    Z-Torque told those signals (``reference_gains(..., sensor_profile=)``) clears the
+    sticking without touching the drive's limits; the same law told nothing reads the 100 Hz
+    staircases as exact signals and bangs between ±60 kN·m (control.md, "With the rig's
+    realistic sensors")."""
+    told = run_loop(preset, SCENARIO, LoopSettings(
+        law="z_torque", sensor_profile="surface_rig",
+        gains=reference_gains("z_torque", preset, J_TD, sensor_profile="surface_rig")))
+    untold = run_loop(preset, SCENARIO, LoopSettings(
+        law="z_torque", sensor_profile="surface_rig",
+        gains=reference_gains("z_torque", preset, J_TD)))
+    assert told.stick_fraction == 0.0
+    assert told.ssi <= 0.4
+    assert told.saturation_fraction < 0.01
+    assert untold.saturation_fraction > 0.5
+
+
 def test_soft_speed_with_inertia_compensation_reduces_ssi(table):
     assert table["soft_speed"].ssi < 0.8 * table["stiff_pi"].ssi
 

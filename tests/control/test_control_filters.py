@@ -63,6 +63,46 @@ def test_first_mode_frequency_from_the_lumped_parameters():
         math.sqrt(c * (1 / i + 1 / 2900.0)) / (2 * math.pi))
 
 
+def _shaft_with_end_inertias_hz(geometry, top_kg_m2: float, bottom_kg_m2: float) -> float:
+    """Lowest mode of a uniform shaft between two rigid inertias, from its closed-form
+    frequency equation (θ = ωL/c, μ = end inertia / shaft inertia ρ J_p L):
+    (θ² μ_top μ_bottom - 1) sin θ = θ (μ_top + μ_bottom) cos θ; a held top is μ_top → ∞,
+    θ tan θ = 1/μ_bottom. Solved by bisection on its first sign change."""
+    jp = math.pi / 32 * (geometry.pipe_od_m**4 - geometry.pipe_id_m**4)
+    shaft = geometry.steel_density_kg_m3 * jp * geometry.pipe_length_m
+    mb = bottom_kg_m2 / shaft
+    if math.isinf(top_kg_m2):
+        def f(x):
+            return x * math.sin(x) - math.cos(x) / mb
+    else:
+        mt = top_kg_m2 / shaft
+        def f(x):
+            return (x * x * mt * mb - 1) * math.sin(x) - x * (mt + mb) * math.cos(x)
+    lo, step = 1e-6, 1e-3
+    while f(lo) * f(lo + step) > 0:
+        lo += step
+    hi = lo + step
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if f(lo) * f(mid) > 0 else (lo, mid)
+    speed = math.sqrt(geometry.shear_modulus_pa / geometry.steel_density_kg_m3)
+    return 0.5 * (lo + hi) * speed / (2 * math.pi * geometry.pipe_length_m)
+
+
+@pytest.mark.parametrize("name", ["base", "deep"])
+@pytest.mark.parametrize("top", [None, 2900.0])
+def test_first_mode_of_the_distributed_string_is_the_shafts_with_end_inertias(name, top):
+    """The distributed string's f₁ (the tuning SoftSpeed and Z-Torque take on that model)
+    against the closed form of a shaft between the drive's and the BHA's inertias: the pipe's
+    own inertia puts it well below the lumped √(C(1/I + 1/J))/(2π) (base: 0.57 vs 0.76 Hz)."""
+    preset = load_preset(name)
+    f1 = first_mode_frequency_hz(preset, top, string_model="distributed")
+    exact = _shaft_with_end_inertias_hz(preset.string, math.inf if top is None else top,
+                                        preset.rig.bha_inertia_kg_m2)
+    assert f1 == pytest.approx(exact, rel=1e-3)
+    assert f1 < 0.9 * first_mode_frequency_hz(preset, top)
+
+
 @pytest.mark.parametrize("f_hz", [0.17, 0.76, 1.3])
 def test_auto_tune_finds_a_known_frequency_in_a_noisy_torque(f_hz):
     """A stick-slip-like torque (fundamental and harmonics), trend and noise, 60 s at 100 Hz."""

@@ -42,7 +42,7 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
     ros.create_subscription(DiagnosticArray, "/diagnostics", lambda m: diagnostics.extend(
         s for s in m.status if "controller" in s.name), 100)
     with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={NS}",
-                     "-p", "top_drive_mode:=speed"), \
+                     "-p", "top_drive_mode:=speed", "-p", "rate_hz:=250.0"), \
          NodeProcess("drill_sim_controller", "--ros-args", "-r", f"__ns:={NS}",
                      "-p", f"rig:={RIG}", "-p", "enabled:=false",
                      "-p", "manage_drive_mode:=true", "-p", "inputs:=exact") as ctl:
@@ -73,8 +73,9 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
         diagnostics.clear()
         wait_for(lambda: any(s.message == "z_torque: controlling" for s in diagnostics), ros,
                  30.0, "diagnostics while controlling")
-        keys = {v.key for v in diagnostics[-1].values}
-        assert {"law", "saturation_fraction", "windup_fraction", "samples"} <= keys
+        values = {v.key: v.value for v in diagnostics[-1].values}
+        assert {"law", "saturation_fraction", "windup_fraction", "samples"} <= set(values)
+        assert float(values["sample_period_s"]) == 1 / 250    # read from the rig's rate_hz
         off = _set(ros, controller, "enabled",
                    ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=False))
         assert off.successful
