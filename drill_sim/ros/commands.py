@@ -24,7 +24,7 @@ from rclpy.node import Node
 from rclpy.type_support import check_is_valid_msg_type
 
 from ..wire import WireError, rig_topics
-from ..wire.cdr import JointCommand, decode_command
+from ..wire.cdr import JointCommand, command_decoder
 from ..wire.rig_topics import RigTopic
 from .topics import message_class, rclpy_qos
 
@@ -63,6 +63,10 @@ class CommandInbox:
         self._last_sequence: dict[str, int] = {}
         self._context = node.context.handle
         self._watched = [h for _, h, _ in self._subs]
+        # per topic, what a take needs, bound once: the take itself and the decoder of its type
+        self._takers = [(t, h.take_message, cls, command_decoder(t.type_name))
+                        for t, h, cls in self._subs]
+        self._handles = {t.name: h for t, h, _ in self._subs}
         self._wait_set = _rclpy.WaitSet(len(self._subs), 0, 0, 0, 0, 0, self._context)
 
     def wait_on(self, names: tuple[str, ...] | None) -> None:
@@ -88,33 +92,35 @@ class CommandInbox:
         """What arrived since the last call, at most ``limit`` per topic, each topic's in
         arrival order; undecodable messages are counted and left out."""
         out: list[Command] = []
-        for t, handle, cls in self._subs:
+        for t, take, cls, decode in self._takers:
             for _ in range(self.limit):
-                taken = handle.take_message(cls, True)
+                taken = take(cls, True)
                 if taken is None:
                     break
                 data, info = taken
                 self.received += 1
-                self._count_gap(t.name, handle, info.get("publication_sequence_number"))
+                sequence = info.get("publication_sequence_number")
+                if sequence:
+                    self._count_gap(t.name, sequence)
                 try:
-                    frame_id, sec, nanosec, six = decode_command(t.type_name, data)
+                    frame_id, sec, nanosec, six = decode(data)
                 except WireError:
                     self.undecodable += 1
                     continue
                 out.append(Command(t, data, frame_id, sec, nanosec, six))
         return out
 
-    def _count_gap(self, name: str, handle, sequence: int | None) -> None:
-        """Messages overwritten before they were taken: gaps in one publisher's numbering."""
-        if not sequence:                             # not reported by this middleware
-            return
+    def _count_gap(self, name: str, sequence: int) -> None:
+        """Messages overwritten before they were taken: gaps in one publisher's numbering
+        (while the topic has one publisher; a middleware that numbers nothing reports 0)."""
         last = self._last_sequence.get(name)
         self._last_sequence[name] = sequence
-        if last is not None and sequence > last + 1 and handle.get_publisher_count() == 1:
+        if (last is not None and sequence > last + 1
+                and self._handles[name].get_publisher_count() == 1):
             self.lost += sequence - last - 1
 
     def destroy(self) -> None:
         self._wait_set.destroy_when_not_in_use()
         for _, handle, _ in self._subs:
             handle.destroy_when_not_in_use()
-        self._subs, self._watched = [], []
+        self._subs, self._watched, self._takers, self._handles = [], [], [], {}

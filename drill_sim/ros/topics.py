@@ -5,7 +5,9 @@ rosbag2's ``offered_qos_profiles``, strings in Jazzy, integers in older bags).""
 from __future__ import annotations
 
 import importlib
+from collections.abc import Callable
 
+from rclpy.publisher import Publisher
 from rclpy.qos import (
     DurabilityPolicy,
     HistoryPolicy,
@@ -43,6 +45,16 @@ def _interface_class(type_name: str, kind: str) -> type:
         return getattr(importlib.import_module(f"{parts[0]}.{kind}"), parts[2])
     except (ImportError, AttributeError):
         raise UnknownType(f"{kind} type '{type_name}' is not installed here") from None
+
+
+def raw_sender(publisher: Publisher) -> Callable[[bytes], None]:
+    """Publish CDR bytes on ``publisher`` without ``Publisher.publish``'s wrapper.
+
+    The wrapper enters the handle's use guard and checks the type on every call: ~10 us of a
+    ~20 us raw publish here (measured from another process's subscriber), which at 1 kHz and
+    25 outputs was a quarter of a core. The guard keeps a publisher from being destroyed
+    while another thread publishes; the rig publishes and destroys from one thread."""
+    return publisher.handle.publish_raw
 
 
 def rclpy_qos(qos: Qos) -> QoSProfile:

@@ -374,6 +374,10 @@ def decode_command(type_name: str, data: bytes
                    ) -> tuple[str, int, int, tuple[float, ...] | JointCommand]:
     """A command message's frame_id, stamp and values: the six float64 of a TwistStamped or
     WrenchStamped (``decode_stamped_vectors``), or a JointState's ``JointCommand``."""
-    if type_name == JOINT_STATE:
-        return decode_joint_state(data)
-    return decode_stamped_vectors(data)
+    return command_decoder(type_name)(data)
+
+
+def command_decoder(type_name: str):
+    """The decoder ``decode_command`` uses for messages of ``type_name`` (chosen once, for a
+    subscription that decodes every message it takes)."""
+    return decode_joint_state if type_name == JOINT_STATE else decode_stamped_vectors
