@@ -4,6 +4,7 @@ reproduced bit for bit by ``bag resim`` from the recorded profile and seed."""
 
 from __future__ import annotations
 
+import csv
 import json
 import subprocess
 
@@ -81,6 +82,21 @@ def test_measured_topics_follow_the_profile_and_resim_reproduces_them(ros, tmp_p
     assert np.abs(wob - exact).max() > 0                         # not the exact state
     span = 5 * 2000.0 + 250.0                                    # 5 sigma of noise, half a step
     assert exact.min() - span <= wob.min() and wob.max() <= exact.max() + span
+    # bag export carries what the sensors showed beside the exact state, matched by stamp
+    out = tmp_path / "session.csv"
+    done = subprocess.run([installed("drill_sim"), "bag", "export", str(bag), "--out", str(out)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stdout + done.stderr
+    with open(out, newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert {f"measured_{c}" for c in ("surface_torque_nm", "hook_load_n",
+                                      "top_drive_speed_rad_s", "motor_torque_nm", "wob_n",
+                                      "tob_nm", "bit_speed_rad_s")} <= set(rows[0])
+    sent = {m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec: m.wrench.force.z
+            for m in series[f"{RIG}/measured/bit/wrench"]}
+    exported = {int(r["stamp_ns"]): float(r["measured_wob_n"]) for r in rows}
+    # (the reset published its new start at the last tick's stamp: matched in order)
+    assert len(exported) == len(sent) and all(exported[ns] == v for ns, v in sent.items())
     meta = reader.info(bag).metadata
     assert meta["parameters"]["sensor_seed"] == "42"
     assert json.loads(meta["sensors"]["profile"])["channels"]["wob_n"]["noise_std"] == 2000.0

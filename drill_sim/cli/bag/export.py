@@ -1,8 +1,10 @@
 """``drill_sim bag export``: the rig's time series as CSV, SI column names, streamed a chunk
 at a time. ``time_s`` is seconds after the session's first sample, at full precision; then
-the joint_states quantities, ``motor_torque_nm`` when the bag has the top drive's motor torque
-(matched by stamp; empty where a sample has none); the last column, ``stamp_ns``, is each
-sample's header stamp (nanoseconds, absolute)."""
+the joint_states quantities; then, for each stamped topic the bag has beside them
+(``bag.stamped_series``), its columns matched by stamp, empty where a sample has none:
+``motor_torque_nm`` (the top drive's motor) and ``measured_*`` (what the rig's sensors showed,
+e.g. ``measured_surface_torque_nm``); the last column, ``stamp_ns``, is each sample's header
+stamp (nanoseconds, absolute)."""
 
 from __future__ import annotations
 
@@ -11,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ...bag.motor_series import COLUMN as MOTOR_COLUMN
 from ...bag.series import JOINT_FIELDS, VALUE_COLUMN
 from . import window
 
@@ -30,12 +31,12 @@ def run(args: argparse.Namespace) -> int:
     rows = 0
     try:
         with window.samples(args) as s, open(tmp, "w", encoding="ascii") as out:
-            columns = COLUMNS if s.motor is None else (*COLUMNS[:-1], MOTOR_COLUMN, COLUMNS[-1])
-            out.write(",".join(columns) + "\n")
+            extra = [c for spec, _ in s.stamped for c in spec.columns]
+            out.write(",".join((*COLUMNS[:-1], *extra, COLUMNS[-1])) + "\n")
             for ns, values in s.chunks:
                 rows += ns.size
-                motor = None if s.motor is None else s.motor.at(ns)
-                out.writelines(_lines(ns, values, s.chunks.origin_ns, motor))
+                beside = np.hstack([m.at(ns) for _, m in s.stamped]) if extra else None
+                out.writelines(_lines(ns, values, s.chunks.origin_ns, beside))
         status = s.verdict(args)
         if status:
             return status
@@ -46,11 +47,12 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _lines(ns, values, origin_ns: int, motor: np.ndarray | None) -> list[str]:
-    """CSV lines: every float at full precision (shortest repr that reads back exactly)."""
+def _lines(ns, values, origin_ns: int, beside: np.ndarray | None) -> list[str]:
+    """CSV lines: every float at full precision (shortest repr that reads back exactly); a
+    stamped topic's value missing at a sample is an empty field."""
     picked = values[:, [VALUE_COLUMN[name] for name in JOINT_FIELDS]].tolist()
     times = ((ns - origin_ns) / 1e9).tolist()
-    extra = [""] * ns.size if motor is None else \
-        ["," + (repr(m) if m == m else "") for m in motor.tolist()]
+    extra = [""] * ns.size if beside is None else \
+        ["".join("," + (repr(m) if m == m else "") for m in row) for row in beside.tolist()]
     return [f"{t!r},{','.join(map(repr, row))}{more},{stamp}\n"
             for t, row, more, stamp in zip(times, picked, extra, ns.tolist(), strict=True)]

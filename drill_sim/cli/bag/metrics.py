@@ -28,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
         for ns, values in s.chunks:
             stats.add((ns - s.chunks.origin_ns) / 1e9, columns(values))
             if s.motor is not None:
-                motor = s.motor.at(ns)
+                motor = s.motor.at(ns)[:, 0]
                 motor = motor[np.isfinite(motor)]
                 motor_sum_nm, motor_n = motor_sum_nm + float(motor.sum()), motor_n + motor.size
     status = s.verdict(args, stats.problems())

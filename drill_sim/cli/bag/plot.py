@@ -25,7 +25,7 @@ def run(args: argparse.Namespace) -> int:
         chunks = list(s.chunks)
         series = RigSeries.from_chunks(s.topic, chunks)
         motor = None if s.motor is None else \
-            np.concatenate([s.motor.at(ns) for ns, _ in chunks])
+            np.concatenate([s.motor.at(ns)[:, 0] for ns, _ in chunks])
     status = s.verdict(args)
     if status:
         return status

@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ...bag.bag import Bag
-from ...bag.motor_series import StampMatched, motor_chunks, motor_topic
 from ...bag.rig_stats import Window, Windowed
 from ...bag.series import joint_chunks, joint_topic
+from ...bag.stamped_series import MOTOR, StampedTopic, StampMatched, matched
 from ..errors import UsageError
 from . import partial
 
@@ -56,7 +56,13 @@ class Samples:
     chunks: Windowed
     problems: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
-    motor: StampMatched | None = None     # the motor torque [N m] at the chunks' stamps
+    # the rig's stamped topics beside (motor torque, measured quantities), matched by stamp
+    stamped: list[tuple[StampedTopic, StampMatched]] = field(default_factory=list)
+
+    @property
+    def motor(self) -> StampMatched | None:
+        """The motor torque [N m] at the chunks' stamps (one column), if the bag has it."""
+        return next((m for spec, m in self.stamped if spec is MOTOR), None)
 
     def verdict(self, args: argparse.Namespace, more: list[str] = ()) -> int:
         """``partial.verdict`` on what was found (call once the chunks are read)."""
@@ -70,6 +76,5 @@ def samples(args: argparse.Namespace) -> Iterator[Samples]:
         name = joint_topic(bag, args.topic)
         problems, notes = partial.known(bag)
         window = Window(args.start, args.end, args.last)
-        motor = motor_topic(bag, name)
         yield Samples(name, Windowed(joint_chunks(bag, name, problems), window), problems,
-                      notes, None if motor is None else StampMatched(motor_chunks(bag, motor)))
+                      notes, matched(bag, name))
