@@ -184,6 +184,43 @@ def test_kinematic_mode_refuses_torque_and_follows_joint_velocity_then_switches(
     # the JointState refusals' texts: tests/core/test_session_top_drive.py)
 
 
+def test_speed_mode_is_the_drive_pi_on_the_set_point(ros):
+    """The drive's own speed loop (speed mode, K_p = 50 Z, K_i = 5 J_TD): a set-point step of
+    Δω kicks the motor torque by K_p Δω on the tick that takes it (the integral and the
+    drive's speed move it by < 1 % within that millisecond); the speed then settles on the
+    set-point, and the motor, holding a steady speed, applies the string's torque (J_TD dΩ/dt
+    = T_m - T_s = 0). Drilling at 250 rpm / 100 kN, a stable point."""
+    from geometry_msgs.msg import TwistStamped
+
+    from drill_sim.control.tuning import pipe_impedance
+    kp = 50.0 * pipe_impedance("base")
+    start, step = 250 * math.pi / 30, 260 * math.pi / 30        # [rad/s]
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/tds", "-p",
+                     "publish_clock:=true", "-p", "top_drive_mode:=speed", "-p",
+                     f"initial_top_drive_speed_rad_s:={start}"):
+        rig = _Rig(ros, "/tds")
+        speed = ros.create_publisher(TwistStamped, f"{rig.base}/cmd/top_drive", 10)
+        wait_for(lambda: speed.get_subscription_count() > 0, ros, 30.0, "the speed command")
+        spin_for(ros, 0.2)
+        t0_nm = rig.motor[-1][1]
+
+        def send() -> None:
+            msg = TwistStamped()
+            msg.header.frame_id = "top_drive"
+            msg.twist.angular.z = step
+            speed.publish(msg)
+        rig.until(lambda: abs(rig.motor[-1][1] - t0_nm) > 1e3, "the drive's kick", send)
+        kicked = next(i for i, (_, t) in enumerate(rig.motor) if abs(t - t0_nm) > 1e3)
+        jump = rig.motor[kicked][1] - rig.motor[kicked - 1][1]
+        assert jump == pytest.approx(kp * (step - start), rel=0.01)
+        wait_for(lambda: len(rig.motor) > kicked + 6000, ros, 60.0, "6 s after the step")
+        tail = slice(-1000, None)                                     # the last second
+        assert sum(rig.speed[tail]) / 1000 == pytest.approx(step, rel=1e-3)
+        motor = [t for _, t in rig.motor[tail]]
+        surface = [t for t, _ in rig.surface[tail]]
+        assert sum(motor) / 1000 == pytest.approx(sum(surface) / 1000, rel=5e-3)
+
+
 @pytest.mark.parametrize("params, fragment", [
     (["top_drive_mode:=turbo"], "top_drive_mode = 'turbo': expected one of kinematic, speed, "
                                 "torque"),
