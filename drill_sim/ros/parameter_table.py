@@ -147,7 +147,8 @@ def specs(preset: Preset) -> list[Spec]:
                        "keeps, so it cannot change while the node runs"))
     speed = "top drives turn at up to ~250-350 rpm (26-37 rad/s)"
     out += [
-        Spec("rate_hz", 1000.0, "tick rate of the stepping timer", "Hz", 1.0, 5000.0,
+        Spec("rate_hz", 1000.0, "tick rate: each tick advances 1/rate_hz of simulated time",
+             "Hz", 1.0, 5000.0,
              "one tick costs ~0.1-0.2 ms in rclpy"),
         Spec("real_time_factor", 1.0, "simulated seconds per wall second", "", 0.01, 1000.0),
         Spec("publish_clock", False, "publish /clock with the simulation time (sim-time mode)",
