@@ -64,8 +64,9 @@ class FilteredDerivative:
     """dx/dt seen through a first-order low-pass at ``corner_hz``: s·ωc/(s + ωc).
 
     Discretely ωc times the prewarped high-pass, which equals the low-pass section (same
-    corner) applied to the prewarped bilinear derivative; so LPF(T_m) - J·FilteredDerivative(Ω)
-    is one consistent filter acting on T_m - J dΩ/dt.
+    corner) applied to the prewarped bilinear derivative (SoftSpeed's inertia compensation).
+    Not for an estimate that must cancel a torque applied over the sample: the bilinear
+    derivative is half a sample off that (``z_torque`` takes a backward difference).
     """
 
     __slots__ = ("_hpf", "_wc")
@@ -111,13 +112,14 @@ class SampleWindow:
 
     A signal that updates every n law samples (a 100 Hz drive signal read at 1 kHz) is a
     staircase: its mean over n samples is its linear interpolation, and its change over n
-    samples divided by n h is the slope of that interpolation, so a torque and a speed that
-    both come as such staircases stay aligned in time after ``mean`` and ``slope``."""
+    samples (what ``push`` returns, subtracted from the newest) divided by n h is the slope of
+    that interpolation, so a torque and a speed that both come as such staircases stay aligned
+    in time as a window's mean and the other window's slope."""
 
-    __slots__ = ("h_s", "i", "n", "ring", "total")
+    __slots__ = ("i", "n", "ring", "total")
 
-    def __init__(self, n: int, h_s: float) -> None:
-        self.n, self.h_s = n, h_s
+    def __init__(self, n: int) -> None:
+        self.n = n
         self.ring = [0.0] * n
         self.i = 0
         self.total = 0.0

@@ -31,8 +31,8 @@ integral carries) so that only oscillations are fed back; LPF_T bounds what the 
 to speed noise: white noise σ sampled at f_s gives T̂_p a noise below J_TD ωc σ (ωc = 2π·2.5 Hz)
 and T̃ about J_TD σ √(ωc³/(4 f_s)) -- 28 N·m for 0.01 rad/s at 1 kHz, against
 J_TD √2 σ/h = 41 kN·m for the bare difference. The corners suit stick-slip at 0.1-0.76 Hz (the
-T path's phase within 30° of zero); keep ``torque_lowpass_hz`` at least three times the
-stick-slip frequency.
+T path's phase within 30° of zero); keep ``torque_lowpass_hz`` at least twice the stick-slip
+frequency (three times with exact signals).
 """
 
 from __future__ import annotations
@@ -75,8 +75,8 @@ class ZTorque(Law):
                               low_inclusive=True, high=MAX_MEASUREMENT_PERIOD_S)
         n = max(1, round(period / h)) if period > 0.0 else 1
         self.measurement_period_s = n * h        # whole samples; 0 given: every sample
-        self.torque_window = SampleWindow(n, h)
-        self.speed_window = SampleWindow(n, h)
+        self.torque_window = SampleWindow(n)
+        self.speed_window = SampleWindow(n)
         # each signal through the other's filter: the speed through the torque signal's lag
         self.speed_lag = HeldLag(torque_signal_tau_s, h, name="torque_signal_tau_s")
         self.torque_lag = HeldLag(speed_signal_tau_s, h, name="speed_signal_tau_s")

@@ -87,6 +87,10 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
 @pytest.mark.parametrize("program, args, fragment", [
     ("drill_sim_controller", ("-p", "law:=nosuch"), "law = 'nosuch': expected one of stiff_pi"),
     ("drill_sim_controller", ("-p", "enabled:=maybe"), "expecting type 'BOOL'"),
+    ("drill_sim_controller", ("-p", "sample_period_s:=-0.001"),
+     "sample_period_s = -0.001: expected 0 (the rig's 1/rate_hz"),
+    ("drill_sim_controller", ("-p", "z_torque.measurement_period_s:=2.0"),
+     "measurement_period_s = 2.0 is out of range"),
     ("drill_sim_controller", ("--params-file", "nosuch.yaml"), "cannot start ROS"),
     ("drill_sim_node", ("--params-file", "nosuch.yaml"), "cannot start ROS"),
 ])
