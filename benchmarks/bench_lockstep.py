@@ -15,8 +15,12 @@ load 1.7, 0.33-0.35 ms at 2.1, 0.35-0.39 ms at 2.5-4 (CPU 0.21-0.25 ms node + 0.
 controller); the rclpy controller 0.40-0.42 ms at load 2.1. The machine's other load enters
 the figure: say how loaded it was.
 
+``--rig floor`` puts ``floor_rig.py`` in the rig's place: it publishes a sample and waits for
+its answer, nothing else, so its figure is the middleware's floor on this machine (the rig's
+own share of a tick is the difference).
+
 Run: .venv/bin/python benchmarks/bench_lockstep.py [--ticks 5000] [--record] [--repeat 3]
-         [--controller lean|rclpy] [--executor waitset|events|single]
+         [--controller lean|rclpy] [--executor waitset|events|single] [--rig node|floor]
          (--executor: the lean controller's wait, or the rclpy controller's executor)
 """
 
@@ -44,10 +48,14 @@ def _cpu_s(pid: int) -> float:
 
 
 def run_once(ticks: int, record: Path | None, controller: str,
-             executor: str) -> tuple[float, float, float]:
+             executor: str, rig: str = "node") -> tuple[float, float, float]:
     """(wall ms, node CPU ms, controller CPU ms) per lockstep tick."""
-    args = [str(BIN / "drill_sim_node"), "--ros-args", "-r", f"__ns:={NS}",
-            "-p", "publish_clock:=true", "-p", "lockstep:=true", "-p", "start_paused:=true"]
+    if rig == "floor":
+        args = [sys.executable, str(Path(__file__).resolve().parent / "floor_rig.py"),
+                "--rig", f"{NS}/drill_sim"]
+    else:
+        args = [str(BIN / "drill_sim_node"), "--ros-args", "-r", f"__ns:={NS}",
+                "-p", "publish_clock:=true", "-p", "lockstep:=true", "-p", "start_paused:=true"]
     if record is not None:
         args += ["-p", f"record:={record}"]
     node = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -81,22 +89,27 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--record", action="store_true", help="the node records its bag too")
     parser.add_argument("--controller", choices=tuple(CONTROLLERS), default="lean")
+    parser.add_argument("--rig", choices=("node", "floor"), default="node",
+                        help="floor: a rig that only publishes and waits (floor_rig.py)")
     parser.add_argument("--executor", choices=("events", "single", "waitset"), default=None,
                         help="rclpy: its executor (events, default; single); lean: its wait "
                         "(waitset, default; events)")
     args = parser.parse_args()
     args.executor = args.executor or ("waitset" if args.controller == "lean" else "events")
+    if args.rig == "floor" and (args.record or args.controller != "lean"):
+        parser.error("--rig floor takes the lean controller and no --record")
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 230)))
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     print(f"lockstep, 1000 Hz, one PI controller in another process, {args.ticks} ticks"
-          f"{', recording' if args.record else ''}, controller {args.controller} "
+          f"{', recording' if args.record else ''}, rig {args.rig}, controller {args.controller} "
           f"({args.executor}); "
           "load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.repeat):
             bag = Path(tmp) / f"run{k}" if args.record else None
-            wall, node_cpu, ctl_cpu = run_once(args.ticks, bag, args.controller, args.executor)
+            wall, node_cpu, ctl_cpu = run_once(args.ticks, bag, args.controller, args.executor,
+                                               args.rig)
             print(f"run {k + 1}: {wall:.3f} ms wall a tick (target <= 0.3 ms), CPU "
                   f"{node_cpu:.3f} ms node + {ctl_cpu:.3f} ms controller a tick; "
                   f"{1.0 / wall:.2f} x real time")
