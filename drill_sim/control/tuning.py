@@ -61,7 +61,7 @@ def first_mode_frequency_hz(source: Preset | RigParameters | str,
     ``lumped``: √(C(1/I + 1/J_TD))/(2π), or √(C/I)/(2π) if kinematic. ``distributed``: the
     lowest root of the pipe's frequency equation with the BHA at the bottom and the drive's
     inertia at the top (``core.stability_distributed.natural_frequencies``; needs a preset's
-    pipe geometry) -- the pipe's own inertia lowers it (base: 0.70 against 0.76 Hz).
+    pipe geometry) -- the pipe's own inertia lowers it (base: 0.57 against 0.76 Hz).
     """
     if isinstance(source, str):
         source = load_preset(source)

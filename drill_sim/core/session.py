@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
 from .parameters import ParameterError, RigParameters, StringGeometry
@@ -155,11 +155,6 @@ class CommandRule:
     signed: bool = False         # accepted in [-limit, limit], not [0, limit]
     mode: str = ""               # the top_drive_mode it needs ("" any)
 
-    label: str = field(init=False)   # what a refusal names: the command and its field
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "label", f"{self.what} {self.field}")
-
 
 MOTOR_TORQUE_COMMAND_LIMIT_NM = 1e6       # |motor torque command|: beyond any top drive
 JOINT_COMMANDS = "joint_commands"         # the rule of sensor_msgs/JointState commands
@@ -220,7 +215,7 @@ def apply_command(rig: Rig, p: dict[str, object], name: str, frame_id: str,
         return _apply_joints(rig, p, frame_id, six)
     rule = COMMANDS[name]
     value = six[rule.index]
-    refusal = _rule_refusal(p, rule, frame_id, value, rule.label)
+    refusal = _rule_refusal(p, rule, frame_id, value, f"{rule.what} {rule.field}")
     if refusal is None:
         _hold(rig, rule, value)
     return refusal
