@@ -18,6 +18,7 @@ from __future__ import annotations
 import inspect
 import math
 import sys
+import time
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -52,6 +53,7 @@ DEFAULT_TORQUE_LIMIT_NM = 60e3            # the base drive's rating; set to the 
 MAX_CATCH_UP = 100                        # law steps for one sample after a gap in the stamps
 PROVISIONAL_PERIOD_S = 1e-3               # gains are checked against it until the rig answers
 RATE_QUERY_PERIOD_S = 0.1                 # the rig's rate_hz is asked this often until known
+HAND_BACK_TIMEOUT_S = 2.0                 # stopping: how long to wait for the rig's speed mode
 # (input, measured topic, exact topic): the rig's names, from its table
 INPUTS = (("speed", "~/measured/top_drive/twist", "~/top_drive/twist"),
           ("motor", "~/measured/top_drive/motor_wrench", "~/top_drive/motor_wrench"),
@@ -286,6 +288,27 @@ class ControllerNode(Node):
                 then()
         future.add_done_callback(done)
 
+    def hand_back(self, executor, timeout_s: float = HAND_BACK_TIMEOUT_S) -> None:
+        """Stopping while in charge of the drive (``manage_drive_mode``, enabled): put the rig's
+        top drive back on its own speed loop (bumpless at the rig) before leaving, so that it
+        does not go on applying the last torque command with nobody closing the loop. Waits
+        for the rig's answer at most ``timeout_s``; says so if there is none."""
+        if not (self.manage_mode and self.core.enabled):
+            return
+        done: list[bool] = []
+        self.core.set_enabled(False)
+        self._request_mode("speed", lambda: done.append(True))
+        end = time.monotonic() + timeout_s
+        while not done and time.monotonic() < end:
+            self._send_mode()
+            executor.spin_once(timeout_sec=0.05)
+        if done:
+            self.get_logger().info(f"stopping: {self.rig}'s top drive is back on its speed loop")
+        else:
+            self.get_logger().error(f"stopping: {self.rig} did not take top_drive_mode = speed "
+                                    f"within {timeout_s:g} s; its drive holds the last torque "
+                                    "command")
+
     # ---- the loop -----------------------------------------------------------------------
     def _on_setpoint(self, msg: TwistStamped) -> None:
         speed = msg.twist.angular.z
@@ -389,6 +412,7 @@ def main(args: list[str] | None = None) -> int:
         executor.add_node(node)
         while not stop:
             executor.spin_once(timeout_sec=0.1)
+        node.hand_back(executor)
     except SystemExit as exc:
         print(exc, file=sys.stderr)
         return 2

@@ -80,8 +80,16 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
                    ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=False))
         assert off.successful
         wait_for(lambda: _mode(ros) == "speed", ros, 10.0, "the drive back on its own loop")
+        # stopped while in charge, it hands the drive back rather than leave the last torque
+        # command applied with nobody closing the loop
+        on = _set(ros, controller, "enabled",
+                  ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=True))
+        assert on.successful, on.reason
+        wait_for(lambda: _mode(ros) == "torque", ros, 10.0, "torque mode again")
         code, out = ctl.stop()
         assert code == 0, out
+        assert _mode(ros) == "speed", out
+        assert "back on its speed loop" in out, out
 
 
 @pytest.mark.parametrize("program, args, fragment", [
