@@ -158,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
                     results.append(run_loop(preset, scenario, one, progress=report))
     finally:
         progress.close()
-    document = _document(args, preset.name, drive, h, results)
+    document = _document(args, preset.name, drive, h, results, settings)
     if args.out is not None:
         _write(args.out, document)
     if args.plot is not None:
@@ -249,8 +249,11 @@ def _drive(args: argparse.Namespace, preset):
 
 
 def _document(args: argparse.Namespace, preset_name: str, drive, h: float,
-              results: list[LoopResult]) -> dict:
+              results: list[LoopResult], settings: list[LoopSettings]) -> dict:
     rows = [{"name": r.law, **r.row()} for r in results]
+    # the gains each law was given (reference tuning and --gain); the others are the law's
+    # defaults (msg_docs/control.md)
+    gains = {one.law: {k: float(v) for k, v in one.gains.items()} for one in settings}
     return {"preset": preset_name, "sample_period_s": h, "sensor_profile": args.sensor_profile,
             "loop": "ros-lockstep" if args.ros else "offline",
             "sensor_seed": args.sensor_seed,
@@ -259,7 +262,7 @@ def _document(args: argparse.Namespace, preset_name: str, drive, h: float,
             "top_drive": {"top_drive_inertia_kg_m2": drive.top_drive_inertia_kg_m2,
                           "motor_torque_min_nm": drive.motor_torque_min_nm,
                           "motor_torque_max_nm": drive.motor_torque_max_nm},
-            "units": UNITS, "rows": rows}
+            "gains": gains, "units": UNITS, "rows": rows}
 
 
 def _write(path: Path, document: dict) -> None:

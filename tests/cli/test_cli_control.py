@@ -38,6 +38,8 @@ def test_json_is_one_object_with_a_row_per_law_as_the_loop_computes_it():
     assert rows["z_torque"]["ssi"] == expected.ssi
     assert rows["z_torque"]["mean_rop"] == expected.mean_rop_m_h
     assert rows["kinematic"]["saturation_fraction"] is None        # strict JSON: no NaN
+    assert doc["gains"]["z_torque"] == reference_gains("z_torque", preset, 2900.0)  # what ran
+    assert doc["gains"]["kinematic"] == {}
 
 
 def test_table_csv_and_plot_are_written(tmp_path, capsys):
