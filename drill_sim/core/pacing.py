@@ -7,8 +7,10 @@ Real-time mode: the ticks due are those the wall clock times ``real_time_factor`
 since an anchor, rounded to the nearest (the timer's jitter, under a quarter period, never
 moves a tick); the anchor is set again at start, on resume, reset, a rate or factor change,
 and when the rig fell more than 0.1 s of simulated time behind: that backlog is dropped rather
-than caught up in a burst. At factor 1 a timer tick advances one tick; one the machine delayed
-(a stall: more than 1.5 periods after the one before) advances the ticks it missed at once.
+than caught up in a burst. A loop that wakes at ``next_tick_s`` advances one tick a wake-up at
+factor 1 (every 1/``rate_hz``), two at factor 2, one every other period at 0.5; a wake-up the
+machine delayed (a stall: more than 1.5 periods after the one before) advances the ticks it
+missed at once.
 Max-speed and lockstep modes: each timer tick advances exactly one tick, back to back.
 """
 
@@ -132,6 +134,21 @@ class Pacer:
             return limit
         self._done += max(due, 0)
         return max(due, 0)
+
+    def next_tick_s(self) -> float:
+        """When the loop should wake next [s, the clock's]: the middle of the rounding window
+        of the tick that comes at least a period (1/``rate_hz`` of wall time) after the last,
+        so a wake-up there, early or late by up to half a tick, advances exactly the ticks of
+        a period: one at factors up to 1 (at 0.5 a wake-up every 2 periods), ceil(factor)
+        above. A loop that sleeps until this stays in phase with the grid of due ticks (a loop
+        with a grid of its own drifts off it after a late wake-up, and jitter around a
+        rounding edge then advances 0 ticks, then 2, publishing one sample for both). Now when
+        not anchored (the next call of ``due`` anchors) and at max speed."""
+        if self.max_speed or not self._anchored:
+            return self._clock()
+        per_wall_s = self.real_time_factor * self.rate_hz
+        return self._wall0 + (self._done + max(1, math.ceil(self.real_time_factor - 1e-9))
+                              ) / per_wall_s
 
     def advanced(self, ticks: int = 1) -> None:
         """The timer tick advanced the rig by ``ticks`` ticks (and published once)."""

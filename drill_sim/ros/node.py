@@ -217,18 +217,18 @@ class RigNode(Node):
 
     # ---- real time ---------------------------------------------------------------------
     def run_real_time(self, executor: EventsExecutor, stop) -> None:
-        """A tick every 1/``rate_hz`` of wall time (the pacer advances the ticks the wall
-        clock says are due, so a late wake-up costs no simulated time), sleeping in between;
-        services, parameters and the diagnostics timer are served every
-        REAL_TIME_SERVE_PERIOD_S. A wake-up more than a period late starts the grid again
-        from now instead of ticking in a burst."""
+        """A tick when the pacer says the next is due (``Pacer.next_tick_s``: at factor 1
+        every 1/``rate_hz`` of wall time, in phase with its grid, so each wake-up advances
+        one tick and a late one costs no simulated time), sleeping in between; paused, a
+        tick (commands taken) every 1/``rate_hz``; services, parameters and the diagnostics
+        timer are served every REAL_TIME_SERVE_PERIOD_S."""
         next_tick = next_serve = time.monotonic()
         while not stop:
             now = time.monotonic()
             if now >= next_tick:
                 self.tick()
-                period = 1.0 / self.pacer.rate_hz
-                next_tick = next_tick + period if now < next_tick + period else now + period
+                next_tick = (now + 1.0 / self.pacer.rate_hz if self.paused
+                             else self.pacer.next_tick_s())
             if now >= next_serve:
                 executor.spin_once(timeout_sec=0.0)
                 next_serve = now + REAL_TIME_SERVE_PERIOD_S

@@ -3,6 +3,8 @@
 rclpy's own SIGINT handler raises inside whatever callback runs; the node, the recorder and
 the player instead take SIGINT and SIGTERM as a request, checked at their loop's safe points,
 so a tick is never published but not recorded, and a bag is always closed properly.
+Every such program also wakes on time (``wakeups``: the timer slack, set before the
+middleware's threads start).
 """
 
 from __future__ import annotations
@@ -16,10 +18,13 @@ import rclpy
 from rclpy._rclpy_pybind11 import RCLError
 from rclpy.signals import SignalHandlerOptions
 
+from .wakeups import tighten_timer_slack
+
 
 def init_stoppable(args: list[str] | None) -> list[int]:
     """``rclpy.init`` without its signal handlers; the returned list gets the number of each
     SIGINT or SIGTERM received (empty: keep going)."""
+    tighten_timer_slack()
     try:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     except RCLError as exc:            # e.g. a --params-file that does not exist or parse

@@ -172,6 +172,47 @@ def test_a_stalled_tick_advances_the_ticks_it_missed_and_is_counted():
     assert pacer.window(0.015).stalls == 0                # counted in its window only
 
 
+def _wake_at_next_tick(pacer: Pacer, clock: FakeClock, lateness_s) -> list[int]:
+    """The node's real-time loop on a fake clock: sleep until ``next_tick_s``, wake up
+    ``lateness_s`` [s] late (one value per wake-up), advance what is due."""
+    dues = []
+    for late in lateness_s:
+        clock.now = max(clock.now, pacer.next_tick_s()) + late
+        pacer.tick_started()
+        dues.append(pacer.due())
+        pacer.advanced(dues[-1])
+    return dues
+
+
+def test_a_loop_waking_at_next_tick_advances_one_tick_a_wake_up():
+    """Woken up to 0.45 periods late at random, the loop advances exactly one tick a wake-up,
+    also after a stall (which advances the ticks it missed, once), and at other real-time
+    factors the ticks of a period (at most one wake-up a period); simulated time follows the
+    wall clock. A loop with a grid of its own drifted
+    off the pacer's after the stall, and the same jitter advanced 0 ticks, then 2."""
+    rng = random.Random(5)
+    clock = FakeClock()
+    pacer = Pacer(1000.0, 1.0, False, window_s=1.0, rig_time_s=0.0, clock=clock)
+    start = clock.now
+    lateness = [rng.uniform(0.0, 4.5e-4) for _ in range(3000)]
+    lateness[1000] = 3.6e-3               # a stall, 3.6 periods late: its tick and 4 missed
+    dues = _wake_at_next_tick(pacer, clock, lateness)
+    assert dues[1000] == 5 and dues[:1000] == [1] * 1000 and dues[1001:] == [1] * 1999
+    assert abs(sum(dues) - (clock.now - start) * 1000.0) <= 1.0    # on the wall clock
+    for factor, ticks, period_s in ((2.0, 2, 1e-3), (0.5, 1, 2e-3), (1.5, 2, 4e-3 / 3),
+                                    (3.0, 3, 1e-3)):
+        pacer.configure(1000.0, factor, False)
+        _wake_at_next_tick(pacer, clock, [0.0])           # anchors: the ticks of 1/rate_hz
+        woken = []
+        for _ in range(200):
+            woken.append(pacer.next_tick_s())
+            late = rng.uniform(0.0, 0.45e-3 / factor)      # up to 0.45 ticks of wall time
+            assert _wake_at_next_tick(pacer, clock, [late]) == [ticks], factor
+        assert woken[-1] - woken[-2] == pytest.approx(period_s)
+    pacer.configure(1000.0, 1.0, True)
+    assert pacer.next_tick_s() == clock.now                 # max speed: always now
+
+
 def test_real_time_pacing_drops_a_long_backlog():
     clock = FakeClock()
     pacer = Pacer(1000.0, 2.0, False, window_s=1.0, rig_time_s=0.0, clock=clock)
