@@ -19,8 +19,12 @@ the figure: say how loaded it was.
 its answer, nothing else, so its figure is the middleware's floor on this machine (the rig's
 own share of a tick is the difference).
 
+``--best-effort``: the rig with ``qos_reliability:=best_effort`` and the lean controller (and
+floor rig) best effort too: no acknowledgements or heartbeats on either side.
+
 Run: .venv/bin/python benchmarks/bench_lockstep.py [--ticks 5000] [--record] [--repeat 3]
          [--controller lean|rclpy] [--executor waitset|events|single] [--rig node|floor]
+         [--best-effort]
          (--executor: the lean controller's wait, or the rclpy controller's executor)
 """
 
@@ -48,21 +52,25 @@ def _cpu_s(pid: int) -> float:
 
 
 def run_once(ticks: int, record: Path | None, controller: str,
-             executor: str, rig: str = "node") -> tuple[float, float, float]:
+             executor: str, rig: str = "node",
+             best_effort: bool = False) -> tuple[float, float, float]:
     """(wall ms, node CPU ms, controller CPU ms) per lockstep tick."""
+    qos = ["--best-effort"] if best_effort else []
     if rig == "floor":
         args = [sys.executable, str(Path(__file__).resolve().parent / "floor_rig.py"),
-                "--rig", f"{NS}/drill_sim"]
+                "--rig", f"{NS}/drill_sim", *qos]
     else:
         args = [str(BIN / "drill_sim_node"), "--ros-args", "-r", f"__ns:={NS}",
-                "-p", "publish_clock:=true", "-p", "lockstep:=true", "-p", "start_paused:=true"]
+                "-p", "publish_clock:=true", "-p", "lockstep:=true", "-p", "start_paused:=true",
+                "-p", f"qos_reliability:={'best_effort' if best_effort else 'reliable'}"]
     if record is not None:
         args += ["-p", f"record:={record}"]
     node = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         how = ["--executor", executor] if controller == "rclpy" else ["--wait", executor]
         ctl = subprocess.Popen([sys.executable, str(CONTROLLERS[controller]), "--rig",
-                                f"{NS}/drill_sim", "--ticks", str(ticks), "--resume", *how],
+                                f"{NS}/drill_sim", "--ticks", str(ticks), "--resume", *how,
+                                *qos],
                                stdout=subprocess.PIPE,
                                text=True)
         cpu_node0 = None
@@ -94,22 +102,27 @@ def main() -> None:
     parser.add_argument("--executor", choices=("events", "single", "waitset"), default=None,
                         help="rclpy: its executor (events, default; single); lean: its wait "
                         "(waitset, default; events)")
+    parser.add_argument("--best-effort", action="store_true",
+                        help="the rig with qos_reliability:=best_effort, the lean controller "
+                        "and the floor rig best effort too")
     args = parser.parse_args()
     args.executor = args.executor or ("waitset" if args.controller == "lean" else "events")
     if args.rig == "floor" and (args.record or args.controller != "lean"):
         parser.error("--rig floor takes the lean controller and no --record")
+    if args.best_effort and args.controller != "lean":
+        parser.error("--best-effort takes the lean controller")
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 230)))
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     print(f"lockstep, 1000 Hz, one PI controller in another process, {args.ticks} ticks"
           f"{', recording' if args.record else ''}, rig {args.rig}, controller {args.controller} "
-          f"({args.executor}); "
+          f"({args.executor}), {'best effort' if args.best_effort else 'reliable'}; "
           "load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.repeat):
             bag = Path(tmp) / f"run{k}" if args.record else None
             wall, node_cpu, ctl_cpu = run_once(args.ticks, bag, args.controller, args.executor,
-                                               args.rig)
+                                               args.rig, args.best_effort)
             print(f"run {k + 1}: {wall:.3f} ms wall a tick (target <= 0.3 ms), CPU "
                   f"{node_cpu:.3f} ms node + {ctl_cpu:.3f} ms controller a tick; "
                   f"{1.0 / wall:.2f} x real time")

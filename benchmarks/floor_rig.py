@@ -4,7 +4,7 @@ publisher's handle), waits on an rcl wait set for the command on ``<rig>/cmd/top
 with that sample's stamp, and publishes the next; no model, no sensors, no encoding. Its wall
 time per tick is the floor any lockstep rig on this middleware and machine stands on.
 
-    python floor_rig.py --rig /bench_lockstep/drill_sim
+    python floor_rig.py --rig /bench_lockstep/drill_sim [--best-effort]
 
 Waits for ``<rig>/pause`` false (the lean controller's ``--resume``) before the first sample;
 stops on SIGINT.
@@ -22,7 +22,7 @@ from geometry_msgs.msg import TwistStamped
 from lean_controller import command_template
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
-from rclpy.qos import QoSProfile
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.type_support import check_is_valid_msg_type
 from std_srvs.srv import SetBool
 
@@ -30,16 +30,19 @@ from std_srvs.srv import SetBool
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rig", default="/drill_sim", help="the name the rig takes")
+    parser.add_argument("--best-effort", action="store_true", help="best-effort QoS")
     args = parser.parse_args()
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT if args.best_effort
+                     else ReliabilityPolicy.RELIABLE)
     stop = []
     signal.signal(signal.SIGINT, lambda *_: stop.append(True))
     rclpy.init(signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     node = rclpy.create_node("floor_rig")
-    send = node.create_publisher(TwistStamped, f"{args.rig}/bit/twist", 10).handle.publish_raw
+    send = node.create_publisher(TwistStamped, f"{args.rig}/bit/twist", qos).handle.publish_raw
     check_is_valid_msg_type(TwistStamped)
     with node.handle:
         sub = _rclpy.Subscription(node.handle, TwistStamped, f"{args.rig}/cmd/top_drive",
-                                  QoSProfile(depth=10).get_c_qos_profile())
+                                  qos.get_c_qos_profile())
     resumed = []
 
     def on_pause(request, response):
