@@ -5,7 +5,7 @@ publishes and records these bytes; tools and benchmarks that make rig bags offli
 
 from __future__ import annotations
 
-from itertools import compress
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from . import cdr, rig_topics
@@ -29,19 +29,21 @@ class RigEncoders:
         self._measured = [t.source == rig_topics.MEASURED for t in self.topics]
         self.measured = tuple(self._measured)    # which topics show the sensors (``m``)
 
-    def sample(self, stamp_ns: int, s: RigSample, m: Measured | None = None,
-               only: list[bool] | None = None) -> list[bytes]:
+    def sample(self, stamp_ns: int, s: RigSample, m: Measured | None = None) -> list[bytes]:
         """One tick's messages stamped ``stamp_ns`` [ns], in the order of ``topics``: the
         exact ones from ``s``, the ``~/measured/`` ones from ``m`` (None: the ideal sensors'
-        reading of ``s``, ``core.sensors.exact_measured``, made only if one of them is
-        encoded). only: which to encode (the others are empty bytes); None: all."""
-        if m is None and (only is None or any(compress(self._measured, only))):
+        reading of ``s``, ``core.sensors.exact_measured``)."""
+        return self.some(stamp_ns, s, m, range(len(self._encoders)))
+
+    def some(self, stamp_ns: int, s: RigSample, m: Measured | None,
+             at: Sequence[int]) -> list[bytes]:
+        """The messages of the topics at ``at`` (indices into ``topics``), in that order,
+        as ``sample`` makes them: the node encodes only the outputs it publishes (walking
+        all 25 encoders with a flag each cost ~4 us a tick more). ``m`` is needed (or made
+        from ``s``) only if one of them is a ``~/measured/`` topic."""
+        encoders, measured = self._encoders, self._measured
+        if m is None and any(measured[k] for k in at):
             from ..core.sensors import exact_measured
             m = exact_measured(s)
         sec, nsec = divmod(stamp_ns, 1_000_000_000)
-        if only is not None:
-            return [encode(sec, nsec, m if measured else s) if wanted else b""
-                    for encode, measured, wanted in zip(self._encoders, self._measured, only,
-                                                        strict=True)]
-        return [encode(sec, nsec, m if measured else s)
-                for encode, measured in zip(self._encoders, self._measured, strict=True)]
+        return [encoders[k](sec, nsec, m if measured[k] else s) for k in at]
