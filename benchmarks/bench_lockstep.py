@@ -12,8 +12,9 @@ is that over the ticks, with the CPU both processes used per tick.
 
 Measured on 2 shared cores (load average from the other jobs): lean, 0.31-0.33 ms a tick at
 load 1.7, 0.33-0.35 ms at 2.1, 0.35-0.39 ms at 2.5-4 (CPU 0.21-0.25 ms node + 0.12-0.16 ms
-controller); the rclpy controller 0.40-0.42 ms at load 2.1. The machine's other load enters
-the figure: say how loaded it was.
+controller); the rclpy controller 0.40-0.42 ms at load 2.1. On a slower machine (load
+0.3-1.3), with the node's timer slack at 1 us: lean 0.27-0.31 ms, --best-effort 0.20-0.26 ms,
+--rig floor 0.18-0.20 ms. The machine's other load enters the figure: say how loaded it was.
 
 ``--rig floor`` puts ``floor_rig.py`` in the rig's place: it publishes a sample and waits for
 its answer, nothing else, so its figure is the middleware's floor on this machine (the rig's
