@@ -116,7 +116,10 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if tty:
             print()
-        stop_processes(procs)
+        # the clients first, then the rig: a controller in charge of the drive hands it back
+        # to the rig's speed loop as it stops, which needs the rig still there
+        stop_processes(procs[1:])
+        stop_processes(procs[:1])
         received = monitor.series()
         executor.shutdown()
         monitor.destroy_node()

@@ -304,6 +304,8 @@ class ControllerNode(Node):
             executor.spin_once(timeout_sec=0.05)
         if done:
             self.get_logger().info(f"stopping: {self.rig}'s top drive is back on its speed loop")
+        elif self.pub.get_subscription_count() == 0 and not self.mode_client.service_is_ready():
+            self.get_logger().info(f"stopping: {self.rig} has stopped too; no drive to hand back")
         else:
             self.get_logger().error(f"stopping: {self.rig} did not take top_drive_mode = speed "
                                     f"within {timeout_s:g} s; its drive holds the last torque "

@@ -98,3 +98,6 @@ def test_main_job_switches_the_scenarios_controller_on_and_compares(tmp_path):
     assert "controller z_torque switched on at" in proc.stderr + proc.stdout   # the driver
     assert "controller z_torque switched on at 2.5 s: SSI" in proc.stdout       # the summary
     assert "stick-slip: no stick-slip before the switch" in proc.stdout
+    # stopped in order, the controller hands the drive back while the rig is still there
+    assert "top drive is back on its speed loop" in proc.stderr, proc.stderr
+    assert "[ERROR]" not in proc.stderr, proc.stderr
