@@ -7,6 +7,7 @@ as subcommands. Bad arguments exit with status 2 and one line on stderr.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 
@@ -44,6 +45,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (UsageError, ParameterError) as exc:
         print(f"drill_sim: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:      # whoever read stdout has gone (``| head``): stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except OSError as exc:
         print(f"drill_sim: error: {exc}", file=sys.stderr)
         return 2

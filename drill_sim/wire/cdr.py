@@ -370,6 +370,47 @@ def decode_joint_state(data: bytes) -> tuple[str, int, int, JointCommand]:
     return frame, sec, nanosec, JointCommand(names, position, velocity, effort)
 
 
+class DiagnosticStatusRecord(NamedTuple):
+    """One diagnostic_msgs/DiagnosticStatus as decoded: level 0 OK, 1 WARN, 2 ERROR, 3 STALE."""
+
+    level: int
+    name: str
+    message: str
+    hardware_id: str
+    values: tuple[tuple[str, str], ...]    # (key, value) in message order
+
+
+MAX_DIAGNOSTIC_ENTRIES = 4096             # statuses in an array, or values in a status
+
+
+def decode_diagnostic_array(data: bytes) -> tuple[int, int, tuple[DiagnosticStatusRecord, ...]]:
+    """Stamp (sec, nanosec) and the statuses of a diagnostic_msgs/DiagnosticArray in
+    little-endian CDR."""
+    try:
+        if bytes(data[:2]) != ENCAPSULATION[:2]:
+            raise WireError(f"not little-endian CDR (header {bytes(data[:4]).hex()})")
+        sec, nanosec = _STAMP.unpack_from(data, 4)
+        r = _Reader(data, 12)
+        r.string()                                             # frame_id
+        statuses = []
+        for _ in range(_count(r.u32(), "statuses")):
+            level = data[r.at]
+            r.at += 1
+            name, message, hardware_id = r.string(), r.string(), r.string()
+            values = tuple((r.string(), r.string())
+                           for _ in range(_count(r.u32(), "values")))
+            statuses.append(DiagnosticStatusRecord(level, name, message, hardware_id, values))
+    except (struct.error, IndexError):
+        raise WireError(f"{len(data)} bytes cannot hold this DiagnosticArray") from None
+    return sec, nanosec, tuple(statuses)
+
+
+def _count(n: int, what: str) -> int:
+    if n > MAX_DIAGNOSTIC_ENTRIES:
+        raise WireError(f"{n} {what} (at most {MAX_DIAGNOSTIC_ENTRIES}): not a DiagnosticArray")
+    return n
+
+
 def decode_command(type_name: str, data: bytes
                    ) -> tuple[str, int, int, tuple[float, ...] | JointCommand]:
     """A command message's frame_id, stamp and values: the six float64 of a TwistStamped or

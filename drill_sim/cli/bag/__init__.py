@@ -11,11 +11,11 @@ import argparse
 from ...bag.errors import BagError
 from ...wire import WireError
 from ..errors import UsageError
-from . import export, info, metrics, plot, repair, resim
+from . import diagnostics, export, info, metrics, plot, repair, resim
 
-HELP = "tools on rosbag2 MCAP bags: info, repair, metrics, export, plot, resim"
+HELP = "tools on rosbag2 MCAP bags: info, repair, metrics, export, plot, resim, diagnostics"
 TOOLS = {"info": info, "repair": repair, "resim": resim, "metrics": metrics,
-         "export": export, "plot": plot}
+         "export": export, "plot": plot, "diagnostics": diagnostics}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
