@@ -11,6 +11,7 @@ callback refuses, with the reason, what the table refuses."""
 
 from __future__ import annotations
 
+import difflib
 from functools import partial
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
@@ -130,3 +131,19 @@ def changed(by_name: dict[str, Spec], values: dict[str, object], params: list[Pa
         return values, "record_split_* apply to recording, and this node does not record " \
                        "(record is empty)"
     return new, None
+
+
+def unknown_given(node: Node) -> list[str]:
+    """One line for each parameter given to ``node`` (``-p``, a params file) that it never
+    declared, with the nearest name it has: ROS ignores such a parameter without a word, so
+    a typo (``rate:=100``) would otherwise go unnoticed. QoS overrides are left alone."""
+    given = getattr(node, "_parameter_overrides", {})      # rclpy's, as the node received them
+    names = list(node.get_parameters_by_prefix(""))
+    lines = []
+    for name in sorted(n for n in given if not node.has_parameter(n)
+                       and not n.startswith("qos_overrides.")):
+        near = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
+        lines.append(f"parameter '{name}' is not one of {node.get_name()}'s and is ignored"
+                     + (f": did you mean '{near[0]}'?" if near else
+                        " (none of its names is close)"))
+    return lines

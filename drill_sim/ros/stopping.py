@@ -9,6 +9,7 @@ middleware's threads start).
 
 from __future__ import annotations
 
+import itertools
 import signal
 import subprocess
 import sys
@@ -25,10 +26,17 @@ def init_stoppable(args: list[str] | None) -> list[int]:
     """``rclpy.init`` without its signal handlers; the returned list gets the number of each
     SIGINT or SIGTERM received (empty: keep going)."""
     tighten_timer_slack()
+    name = Path(sys.argv[0]).name
+    argv = sys.argv if args is None else args
+    for flag, path in itertools.pairwise(argv):
+        if flag == "--params-file" and not Path(path).is_file():
+            what = "not a file" if Path(path).exists() else "no such file"
+            print(f"{name}: cannot start ROS: --params-file {path}: {what}; expected the path "
+                  "of a YAML parameters file", file=sys.stderr)
+            raise SystemExit(2)
     try:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    except RCLError as exc:            # e.g. a --params-file that does not exist or parse
-        name = Path(sys.argv[0]).name
+    except RCLError as exc:            # e.g. a --params-file that does not parse
         why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         print(f"{name}: cannot start ROS: {why}; expected valid --ros-args (a --params-file "
               "that exists and parses, name:=value remappings)", file=sys.stderr)

@@ -99,8 +99,11 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
      "sample_period_s = -0.001: expected 0 (the rig's 1/rate_hz"),
     ("drill_sim_controller", ("-p", "z_torque.measurement_period_s:=2.0"),
      "measurement_period_s = 2.0 is out of range"),
-    ("drill_sim_controller", ("--params-file", "nosuch.yaml"), "cannot start ROS"),
-    ("drill_sim_node", ("--params-file", "nosuch.yaml"), "cannot start ROS"),
+    ("drill_sim_controller", ("--params-file", "nosuch.yaml"),
+     "cannot start ROS: --params-file nosuch.yaml: no such file; expected the path of a YAML"),
+    ("drill_sim_node", ("--params-file", "nosuch.yaml"),
+     "cannot start ROS: --params-file nosuch.yaml: no such file"),
+    ("drill_sim_node", ("--params-file", "/"), "--params-file /: not a file"),
 ])
 def test_bad_start_is_a_clear_line_and_status_2(program, args, fragment):
     """A bad law, a value of the wrong type or a params file that is not there: the reason in

@@ -4,6 +4,9 @@ rig does not compete for the CPU with these timing checks."""
 
 from __future__ import annotations
 
+import select
+import time
+
 import numpy as np
 import pytest
 import rclpy
@@ -21,6 +24,34 @@ def test_bad_startup_parameter_exits_with_a_clear_message(ros):
     code = proc.proc.wait(timeout=30)
     out = proc.proc.stdout.read()
     assert code == 2 and "initial_state" in out and "Traceback" not in out
+
+
+def _line_with(proc: NodeProcess, text: str, timeout_s: float = 30.0) -> str | None:
+    """The first line of the process's output that holds ``text``, read as it comes."""
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        ready, _, _ = select.select([proc.proc.stdout], [], [], 0.5)
+        if ready:
+            line = proc.proc.stdout.readline()
+            if text in line:
+                return line
+            if not line:                              # the process ended
+                return None
+    return None
+
+
+@pytest.mark.parametrize("program", ["drill_sim_node", "drill_sim_controller"])
+def test_a_misspelled_parameter_is_named_with_the_nearest(ros, program):
+    """ROS ignores a parameter a node never declared; the node says so, with the name it
+    likely meant, and runs on."""
+    wrong, meant = ("rate", "rate_hz") if program == "drill_sim_node" else ("lw", "law")
+    with NodeProcess(program, "--ros-args", "-r", "__ns:=/typo", "-p", f"{wrong}:=100",
+                     "-p", "qos_overrides./x.publisher.depth:=5") as proc:
+        line = _line_with(proc, "is not one of")
+        assert line is not None and f"parameter '{wrong}' is not one of" in line, line
+        assert f"did you mean '{meant}'?" in line and "[WARN]" in line
+        assert proc.proc.poll() is None                  # a warning, not a refusal
+        assert _line_with(proc, "qos_overrides", timeout_s=1.0) is None
 
 
 def test_sim_time_mode_publishes_clock_ten_times_faster(ros):
