@@ -44,7 +44,7 @@ from ..control.tuning import pipe_impedance
 from ..core.parameters import ParameterError
 from ..wire import rig_topics
 from ..wire.qos import RELIABLE
-from .parameters import unknown_given
+from .parameters import warn_unknown_given
 from .stopping import init_stoppable
 from .topics import rclpy_qos
 
@@ -102,8 +102,7 @@ class ControllerNode(Node):
                              f"{', '.join(CONTROL_LAWS)}")
         self.rig = p["rig"]
         self._p = p
-        for line in unknown_given(self):
-            self.get_logger().warning(line)
+        warn_unknown_given(self)
         period = p["sample_period_s"]
         if not (isinstance(period, float) and math.isfinite(period) and 0.0 <= period <= 1.0):
             raise SystemExit(f"{NODE_NAME}: sample_period_s = {period!r}: expected 0 (the "

@@ -107,8 +107,7 @@ class RigNode(Node):
             f"'{self.sensors.profile.name}' (seed {self.sensors.seed})"
             f"{', paused' if self.paused else ''}")
         self.get_logger().info(f"rig figures: {session.figures_line(self.rig.params)}")
-        for line in parameters.unknown_given(self):
-            self.get_logger().warning(line)
+        parameters.warn_unknown_given(self)
 
     def _pace_words(self) -> str:
         if self.lockstep is not None:

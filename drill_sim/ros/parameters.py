@@ -133,17 +133,15 @@ def changed(by_name: dict[str, Spec], values: dict[str, object], params: list[Pa
     return new, None
 
 
-def unknown_given(node: Node) -> list[str]:
-    """One line for each parameter given to ``node`` (``-p``, a params file) that it never
+def warn_unknown_given(node: Node) -> None:
+    """A warning for each parameter given to ``node`` (``-p``, a params file) that it never
     declared, with the nearest name it has: ROS ignores such a parameter without a word, so
     a typo (``rate:=100``) would otherwise go unnoticed. QoS overrides are left alone."""
     given = getattr(node, "_parameter_overrides", {})      # rclpy's, as the node received them
     names = list(node.get_parameters_by_prefix(""))
-    lines = []
     for name in sorted(n for n in given if not node.has_parameter(n)
                        and not n.startswith("qos_overrides.")):
         near = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
-        lines.append(f"parameter '{name}' is not one of {node.get_name()}'s and is ignored"
-                     + (f": did you mean '{near[0]}'?" if near else
-                        " (none of its names is close)"))
-    return lines
+        node.get_logger().warning(
+            f"parameter '{name}' is not one of {node.get_name()}'s and is ignored"
+            + (f": did you mean '{near[0]}'?" if near else " (none of its names is close)"))

@@ -15,6 +15,7 @@ from std_msgs.msg import Bool
 from std_srvs.srv import SetBool, Trigger
 
 from drill_sim.core import RPM, Rig
+from drill_sim.ros.wakeups import TIMER_SLACK_NS
 
 RIG = "/drill_sim"
 
@@ -74,7 +75,6 @@ def test_the_node_wakes_on_time(client, rig_process):
     """The running node has 1 us of timer slack, not Linux's 50 us (5 % of a 1 kHz period
     on every sleep and timed middleware wait); set before the middleware started, whose
     threads inherit it."""
-    from drill_sim.ros.wakeups import TIMER_SLACK_NS
     slack = Path(f"/proc/{rig_process.proc.pid}/timerslack_ns")
     if not slack.exists():
         pytest.skip("this system shows no timer slack")

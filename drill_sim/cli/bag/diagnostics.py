@@ -14,19 +14,21 @@ import json
 from pathlib import Path
 
 from ...bag.bag import Bag
-from ...wire import WireError
+from ...core.diagnostics import ERROR, OK, WARN
+from ...wire import WireError, rig_topics
 from ...wire.cdr import decode_diagnostic_array
 from ..errors import UsageError
 
 HELP = "the /diagnostics a bag recorded: level, message and chosen values over time"
-TYPE = "diagnostic_msgs/msg/DiagnosticArray"
-LEVELS = {0: "OK", 1: "WARN", 2: "ERROR", 3: "STALE"}
+TOPIC = rig_topics.DIAGNOSTICS_TOPIC
+TYPE = TOPIC.type_name
+LEVELS = {OK: "OK", WARN: "WARN", ERROR: "ERROR", 3: "STALE"}   # DiagnosticStatus's levels
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("bag", type=Path, help="bag directory or .mcap file")
-    parser.add_argument("--topic", default="/diagnostics",
-                        help="a DiagnosticArray topic of the bag (default: /diagnostics)")
+    parser.add_argument("--topic", default=TOPIC.name,
+                        help=f"a DiagnosticArray topic of the bag (default: {TOPIC.name})")
     parser.add_argument("--name", default="",
                         help="only the statuses whose name contains this (e.g. 'rig')")
     parser.add_argument("--keys", default="",
