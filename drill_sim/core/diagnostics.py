@@ -93,7 +93,7 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
         if ticks.stalls and not max_speed:
             found.append((WARN, f"{ticks.stalls} ticks stalled in the last {ticks.wall_s:.1f} s "
                                 f"(longest {ticks.period_max_s * 1e3:.1f} ms); the rig "
-                                "advanced the ticks they missed at once"))
+                                "caught up the ticks they missed, published late"))
         if lockstep is not None and lockstep.waiting_s > lockstep.timeout_s:
             found.append((WARN, f"lockstep: waiting {lockstep.waiting_s:.1f} s for "
                                 f"{', '.join(lockstep.missing)} stamped "

@@ -10,7 +10,7 @@ and when the rig fell more than 0.1 s of simulated time behind: that backlog is 
 than caught up in a burst. A loop that wakes at ``next_tick_s`` advances one tick a wake-up at
 factor 1 (every 1/``rate_hz``), two at factor 2, one every other period at 0.5; a wake-up the
 machine delayed (a stall: more than 1.5 periods after the one before) advances the ticks it
-missed at once.
+missed at once, each with its own sample (``samples``) up to CATCH_UP_TICKS of them.
 Max-speed and lockstep modes: each timer tick advances exactly one tick, back to back.
 """
 
@@ -25,6 +25,9 @@ import numpy as np
 
 BEHIND_S = 0.1           # simulated seconds per unit real-time factor before the backlog goes
 OVERRUN_PERIODS = 1.5    # a tick later than this many periods is an overrun
+# a stall of at most this many ticks still gives each tick its sample (published late, back
+# to back: ~0.25 ms of CPU each at 1 kHz); a longer one advances its ticks with one sample
+CATCH_UP_TICKS = 5
 
 
 @dataclass(frozen=True)
@@ -150,8 +153,20 @@ class Pacer:
         return self._wall0 + (self._done + max(1, math.ceil(self.real_time_factor - 1e-9))
                               ) / per_wall_s
 
+    def samples(self, ticks: int) -> tuple[int, ...]:
+        """How a wake-up advances the ``ticks`` that ``due`` gave: the ticks of each sample
+        it publishes. At real-time factors up to 1 each tick has its sample, also after a
+        stall of up to CATCH_UP_TICKS ticks (published late, back to back, as a rig's logger
+        keeps every sample while its link lags): so a stall leaves no gap in the samples,
+        the sensors and the recording, and the run is the one an undelayed machine gives with
+        the same commands. Above factor 1 (ceil(factor) ticks a wake-up by design), at max
+        speed and after a longer stall, one sample for all."""
+        if ticks <= 1 or ticks > CATCH_UP_TICKS or self.max_speed or self.real_time_factor > 1:
+            return (ticks,) if ticks > 0 else ()
+        return (1,) * ticks
+
     def advanced(self, ticks: int = 1) -> None:
-        """The timer tick advanced the rig by ``ticks`` ticks (and published once)."""
+        """The rig advanced by ``ticks`` ticks and published one sample."""
         self.ticks += 1 if ticks > 0 else 0
 
     def window(self, rig_time_s: float) -> TickStats:

@@ -142,13 +142,15 @@ class RigNode(Node):
     # ---- the tick ----------------------------------------------------------------------
     def tick(self) -> None:
         """A real-time tick (``run_real_time``) or a max-speed tick: take the commands, advance
-        the ticks due, publish."""
+        the ticks due, publish (each tick's sample, also the ticks a stall delayed:
+        ``Pacer.samples``)."""
         self.pacer.tick_started()
         self.take_commands()
         if self.paused:
             return
-        ticks = self.pacer.due()
-        if ticks and self.advance(ticks):
+        for ticks in self.pacer.samples(self.pacer.due()):   # after a stall: one by one
+            if not self.advance(ticks):
+                break
             self.pacer.advanced(ticks)
             self.publish_sample(self.rig.sample())
         if not self.pacer.max_speed and (now := time.monotonic()) >= self._next_live_refresh:

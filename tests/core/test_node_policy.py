@@ -18,7 +18,7 @@ from drill_sim.core.diagnostics import (
     drilling_regime,
     rig_status,
 )
-from drill_sim.core.pacing import Pacer, TickStats
+from drill_sim.core.pacing import CATCH_UP_TICKS, Pacer, TickStats
 from drill_sim.ros.parameter_table import specs
 
 
@@ -211,6 +211,23 @@ def test_a_loop_waking_at_next_tick_advances_one_tick_a_wake_up():
         assert woken[-1] - woken[-2] == pytest.approx(period_s)
     pacer.configure(1000.0, 1.0, True)
     assert pacer.next_tick_s() == clock.now                 # max speed: always now
+
+
+def test_each_tick_of_a_short_stall_gets_its_own_sample():
+    """After a stall of up to CATCH_UP_TICKS ticks each tick is advanced and published on
+    its own (no gap in the samples); a longer stall, factors above 1 (ceil(factor) ticks a
+    wake-up) and max speed advance with one sample."""
+    pacer = Pacer(1000.0, 1.0, False, window_s=1.0, rig_time_s=0.0, clock=FakeClock())
+    assert pacer.samples(0) == () and pacer.samples(1) == (1,)
+    assert pacer.samples(3) == (1, 1, 1)
+    assert pacer.samples(CATCH_UP_TICKS) == (1,) * CATCH_UP_TICKS
+    assert pacer.samples(CATCH_UP_TICKS + 1) == (CATCH_UP_TICKS + 1,)
+    pacer.configure(1000.0, 0.5, False)
+    assert pacer.samples(2) == (1, 1)
+    pacer.configure(1000.0, 2.0, False)
+    assert pacer.samples(2) == (2,) and pacer.samples(4) == (4,)
+    pacer.configure(1000.0, 1.0, True)
+    assert pacer.samples(1) == (1,)
 
 
 def test_real_time_pacing_drops_a_long_backlog():

@@ -127,3 +127,53 @@ def test_stale_commands_are_reported_on_diagnostics(ros):
     assert float(values["command_age_s"]) > 0.2
     assert {"tick_rate_hz", "tick_period_p99_ms", "overruns", "real_time_factor", "regime",
             "ssi"} <= set(values)
+
+
+def test_a_stalled_node_still_publishes_every_tick(ros):
+    """The node stopped (SIGSTOP) for ~2.5 ms, twenty times, as a busy machine stalls it:
+    each stall's ticks still come, each with its own sample, so the stamps go on 1 ms
+    apart: no gap of 2 to CATCH_UP_TICKS ticks (a stall the machine stretched beyond that
+    may leave one longer gap). Advancing the missed ticks with one sample, as the node did,
+    left a 3-4 ms gap at every stall; the diagnostics still count the stalls."""
+    import os
+    import signal
+    import threading
+
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    from drill_sim.core.pacing import CATCH_UP_TICKS
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/stalled", "-r",
+                     "__node:=stalled_rig") as rig:
+        stamps_ns: list[int] = []
+        overruns: list[int] = []
+        subs = [ros.create_subscription(JointState, "/stalled/stalled_rig/joint_states",
+                                        lambda m: stamps_ns.append(
+                                            m.header.stamp.sec * 10**9 + m.header.stamp.nanosec),
+                                        1000),
+                ros.create_subscription(DiagnosticArray, "/diagnostics", lambda m: overruns.extend(
+                    int(kv.value) for s in m.status if s.name.startswith("stalled_rig")
+                    for kv in s.values if kv.key == "overruns"), 10)]
+        wait_for(lambda: len(stamps_ns) > 500, ros, 30.0, "the stalled rig's samples")
+
+        def stall() -> None:
+            for _ in range(20):
+                time.sleep(0.05)
+                os.kill(rig.proc.pid, signal.SIGSTOP)
+                time.sleep(0.0025)
+                os.kill(rig.proc.pid, signal.SIGCONT)
+
+        stamps_ns.clear()
+        stalls = threading.Thread(target=stall)
+        stalls.start()
+        while stalls.is_alive():
+            rclpy.spin_once(ros, timeout_sec=0.001)
+        first = len(overruns)
+        wait_for(lambda: len(overruns) > first + 1, ros, 10.0, "the rig's diagnostics after")
+        for sub in subs:
+            ros.destroy_subscription(sub)
+    steps = np.round(np.diff(np.array(stamps_ns)) / 1e6).astype(int)    # in ticks of 1 ms
+    assert len(steps) > 900
+    assert overruns[-1] >= 10                         # the node saw the stalls
+    gaps = steps[(steps > 1) & (steps <= CATCH_UP_TICKS)]
+    assert gaps.size == 0, f"samples missing after stalls: gaps of {gaps.tolist()} ticks"
+    assert (steps == 1).mean() > 0.97 and steps.min() == 1
