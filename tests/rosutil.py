@@ -41,10 +41,22 @@ def call_service(node: Node, srv_type, name: str, request):
 
 def set_double(node: Node, target: str, name: str, value: float):
     """Set the double parameter ``name`` of node ``target``; the SetParametersResult."""
-    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.msg import ParameterType, ParameterValue
+    return _set(node, target, name, ParameterValue(type=ParameterType.PARAMETER_DOUBLE,
+                                                   double_value=value))
+
+
+def set_string(node: Node, target: str, name: str, value: str):
+    """Set the string parameter ``name`` of node ``target``; the SetParametersResult."""
+    from rcl_interfaces.msg import ParameterType, ParameterValue
+    return _set(node, target, name, ParameterValue(type=ParameterType.PARAMETER_STRING,
+                                                   string_value=value))
+
+
+def _set(node: Node, target: str, name: str, value):
+    from rcl_interfaces.msg import Parameter
     from rcl_interfaces.srv import SetParameters
-    p = Parameter(name=name, value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE,
-                                                  double_value=value))
+    p = Parameter(name=name, value=value)
     return call_service(node, SetParameters, f"{target}/set_parameters",
                         SetParameters.Request(parameters=[p])).results[0]
 

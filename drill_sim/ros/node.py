@@ -30,7 +30,8 @@ from ..core.diagnostics import CommandCounts, rig_status
 from ..core.lockstep import Lockstep
 from ..core.pacing import Pacer
 from ..core.rig import RigSample
-from ..core.sensors import session_sensors
+from ..core.sensor_profile import CHANNELS
+from ..core.sensors import Measured, session_sensors
 from ..wire import rig_topics
 from ..wire.rig_messages import RigEncoders
 from ..wire.rig_topics import RigTopic
@@ -73,6 +74,10 @@ class RigNode(Node):
         self._outputs = [self._publisher(t) for t in self._enc.topics]
         self._send = [raw_sender(p) for p in self._outputs]     # CDR bytes, one call each
         self._set_live([True] * len(self._outputs))  # then only the outputs with a subscriber
+        # each ~/measured/ output's channels (indices into the sensors' CHANNELS)
+        self._channels_of = [(k, tuple(CHANNELS.index(f.sample) for f in t.fields))
+                             for k, t in enumerate(self._enc.topics) if self._enc.measured[k]]
+        self._on_sample = self.p["measured_publish"] == "on_sample"
         self._next_live_refresh = 0.0
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
         self.commands = CommandInbox(self, self.p["qos_reliability"])
@@ -186,17 +191,30 @@ class RigNode(Node):
             for k, raw in zip(at, enc.some(stamp, s, None, at), strict=True):
                 send[k](raw)
             self._last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
-            if at := self._live_measured_at:
+            if self._on_sample and (held := self._held(self._last[2])):
+                at = [k for k in self._live_measured_at if k not in held]
+            else:
+                at = self._live_measured_at
+            if at:
                 for k, raw in zip(at, enc.some(*self._last, at), strict=True):
                     send[k](raw)
         else:
             self._last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
             data = enc.sample(*self._last)
+            held = self._held(self._last[2]) if self._on_sample else ()
             for k in self._live_at:
-                send[k](data[k])
-            self.recorder.record_outputs(data)
+                if k not in held:
+                    send[k](data[k])
+            self.recorder.record_outputs(data, held)
         if self.lockstep is not None:
             self.lockstep.wait_for(stamp, time.monotonic())
+
+    def _held(self, m: Measured) -> tuple[int, ...]:
+        """The ``~/measured/`` outputs (indices) none of whose channels took a fresh value
+        in this reading: with ``measured_publish:=on_sample`` they are neither published nor
+        recorded this tick."""
+        fresh = m.fresh
+        return tuple(k for k, channels in self._channels_of if not any(fresh[c] for c in channels))
 
     def serve(self, executor: EventsExecutor) -> None:
         """Between back-to-back ticks: services, parameters and diagnostics; and which outputs
@@ -379,6 +397,7 @@ class RigNode(Node):
             self.recorder.record_event("parameters", self.sim_time_s,
                                        {k: str(new[k]) for k in sorted(changed)})
         self.pacer.configure(new["rate_hz"], new["real_time_factor"], self._back_to_back(new))
+        self._on_sample = new["measured_publish"] == "on_sample"
         self._steps_per_tick = self._tick_steps(new["rate_hz"])
         if self.lockstep is not None:
             self.lockstep.timeout_s = new["lockstep_timeout_s"]

@@ -219,6 +219,11 @@ def specs(preset: Preset) -> list[Spec]:
         Spec("sensor_seed", 0, "seed of the sensors' noise: the same seed, the same noise",
              "", 0, 2**31 - 1, "a non-negative 32-bit whole number",
              read_only="the noise streams start from it; " + START_ONLY),
+        Spec("measured_publish", "every_tick", "when each ~/measured/ topic is published: "
+             "every_tick (the held value, every tick) or on_sample (only in the ticks where one "
+             "of its channels takes a fresh value: at the sensor's own rate, a mud-pulse word "
+             "when it arrives); recorded the same",
+             choices=("every_tick", "on_sample")),
     ]
     return out + top_drive_specs(preset)
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from .. import __version__
@@ -77,14 +77,15 @@ class SessionRecorder:
             self.writer.split_duration_ns = int(duration_s * 1e9)
             self.writer.split_size_bytes = int(size_bytes)
 
-    def record_outputs(self, data: list[bytes]) -> None:
+    def record_outputs(self, data: list[bytes], held: Sequence[int] = ()) -> None:
         """One tick's outputs as published, in the table's publishing order, received and
-        published now."""
+        published now; those at ``held`` (indices) were not published and are left out."""
         if self.error is None:
             write, now = self.writer.write, time.time_ns()
             try:
-                for topic, raw in zip(self.outputs, data, strict=True):
-                    write(topic, raw, now, now)
+                for k, (topic, raw) in enumerate(zip(self.outputs, data, strict=True)):
+                    if k not in held:
+                        write(topic, raw, now, now)
             except (OSError, BagError) as exc:
                 self._stop(exc)
 

@@ -14,7 +14,7 @@ from geometry_msgs.msg import WrenchStamped
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 from rosgraph_msgs.msg import Clock
-from rosutil import NodeProcess, call_service, wait_for
+from rosutil import NodeProcess, call_service, set_string, wait_for
 from std_srvs.srv import Trigger
 
 from drill_sim.bag import reader
@@ -119,6 +119,48 @@ def test_measured_topics_follow_the_profile_and_resim_reproduces_them(ros, tmp_p
     assert not r["exact"] and r["worst"]["quantity"].startswith("measured ")
     assert all(r["max_difference"][k] == 0.0 for k in r["max_difference"]
                if not k.startswith("measured "))
+
+
+def test_on_sample_publishes_each_measured_topic_at_its_sensors_rate(ros, tmp_path):
+    """measured_publish switched from every_tick to on_sample while running: from then on
+    each ~/measured/ topic comes (and is recorded) only in the ticks one of its channels is
+    fresh, at the rate the profile gives it (200 Hz ticks: WOB/TOB at 20 Hz every 10th tick,
+    the motor torque at 50 Hz every 4th, the surface torque at 100 Hz every 2nd, the top-drive
+    speed, unsampled, every tick); values the same as before (resim exact)."""
+    profile = tmp_path / "noisy.yaml"
+    profile.write_text(PROFILE)
+    bag = tmp_path / "on_sample"
+    clock: list[float] = []
+    ros.create_subscription(Clock, "/clock", lambda m: clock.append(
+        m.clock.sec + 1e-9 * m.clock.nanosec), 10)
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/sens", "-p",
+                     f"record:={bag}", "-p", "publish_clock:=true", "-p", "max_speed:=true",
+                     "-p", "rate_hz:=200.0", "-p", f"sensor_profile:={profile}"):
+        wait_for(lambda: clock and clock[-1] > 1.0, ros, 60.0, "1 s of simulated time")
+        assert set_string(ros, RIG, "measured_publish", "on_sample").successful
+        switched = clock[-1]
+        wait_for(lambda: clock[-1] > switched + 2.0, ros, 60.0, "2 s more")
+    stamps: dict[str, list[int]] = {}
+    with Reader(bag) as r:
+        for c, _, raw in r.messages():
+            if c.msgtype.endswith(("Stamped", "JointState")) and c.topic.startswith(RIG):
+                sec, nsec = np.frombuffer(raw[4:12], "<i4")
+                stamps.setdefault(c.topic, []).append(int(sec) * 10**9 + int(nsec) % 2**32)
+    joints = np.array(stamps[f"{RIG}/joint_states"])
+    assert np.all(np.diff(joints) == 5_000_000)                   # every 5 ms tick recorded
+    for topic, every in (("bit/wrench", 10), ("top_drive/motor_wrench", 4),
+                         ("top_drive/wrench", 2), ("top_drive/twist", 1)):
+        ticks = np.diff(np.array(stamps[f"{RIG}/measured/{topic}"])) // 5_000_000
+        if every == 1:
+            assert len(ticks) > 550 and np.all(ticks == 1), topic
+            continue
+        before = np.argmax(ticks != 1)
+        after = ticks[before + 1:]                   # past the tick the switch came in
+        assert before > 150 and np.all(ticks[:before] == 1), topic    # every tick, 1 s
+        assert len(after) > 350 // every and np.all(after == every), (topic, set(after))
+    r = _resim(bag)
+    assert r["exact"], r
+    assert r["max_difference"]["measured wob_n"] == 0.0
 
 
 def test_a_bad_sensor_profile_stops_the_node_with_one_clear_line(ros, tmp_path):
