@@ -23,9 +23,12 @@ own share of a tick is the difference).
 ``--best-effort``: the rig with ``qos_reliability:=best_effort`` and the lean controller (and
 floor rig) best effort too: no acknowledgements or heartbeats on either side.
 
+``--thread-priority N``: the node with ``thread_priority:=N`` (its loop under SCHED_FIFO) and
+the controller under ``chrt -f N``.
+
 Run: .venv/bin/python benchmarks/bench_lockstep.py [--ticks 5000] [--record] [--repeat 3]
          [--controller lean|rclpy] [--executor waitset|events|single] [--rig node|floor]
-         [--best-effort]
+         [--best-effort] [--thread-priority 50]
          (--executor: the lean controller's wait, or the rclpy controller's executor)
 """
 
@@ -54,7 +57,7 @@ def _cpu_s(pid: int) -> float:
 
 def run_once(ticks: int, record: Path | None, controller: str,
              executor: str, rig: str = "node",
-             best_effort: bool = False) -> tuple[float, float, float]:
+             best_effort: bool = False, priority: int = 0) -> tuple[float, float, float]:
     """(wall ms, node CPU ms, controller CPU ms) per lockstep tick."""
     qos = ["--best-effort"] if best_effort else []
     if rig == "floor":
@@ -66,10 +69,13 @@ def run_once(ticks: int, record: Path | None, controller: str,
                 "-p", f"qos_reliability:={'best_effort' if best_effort else 'reliable'}"]
     if record is not None:
         args += ["-p", f"record:={record}"]
+    if priority and rig == "node":
+        args += ["-p", f"thread_priority:={priority}"]
+    chrt = ["chrt", "-f", str(priority)] if priority else []
     node = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         how = ["--executor", executor] if controller == "rclpy" else ["--wait", executor]
-        ctl = subprocess.Popen([sys.executable, str(CONTROLLERS[controller]), "--rig",
+        ctl = subprocess.Popen([*chrt, sys.executable, str(CONTROLLERS[controller]), "--rig",
                                 f"{NS}/drill_sim", "--ticks", str(ticks), "--resume", *how,
                                 *qos],
                                stdout=subprocess.PIPE,
@@ -106,6 +112,9 @@ def main() -> None:
     parser.add_argument("--best-effort", action="store_true",
                         help="the rig with qos_reliability:=best_effort, the lean controller "
                         "and the floor rig best effort too")
+    parser.add_argument("--thread-priority", type=int, default=0, metavar="PRIORITY",
+                        help="the node's thread_priority (its loop under SCHED_FIFO) and the "
+                        "controller under chrt -f PRIORITY")
     args = parser.parse_args()
     args.executor = args.executor or ("waitset" if args.controller == "lean" else "events")
     if args.rig == "floor" and (args.record or args.controller != "lean"):
@@ -115,7 +124,9 @@ def main() -> None:
     os.environ.setdefault("ROS_DOMAIN_ID", str(random.randint(150, 230)))
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     print(f"lockstep, 1000 Hz, one PI controller in another process, {args.ticks} ticks"
-          f"{', recording' if args.record else ''}, rig {args.rig}, controller {args.controller} "
+          f"{', recording' if args.record else ''}"
+          f"{f', SCHED_FIFO {args.thread_priority}' if args.thread_priority else ''}"
+          f", rig {args.rig}, controller {args.controller} "
           f"({args.executor}), {'best effort' if args.best_effort else 'reliable'}; "
           "load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
@@ -123,7 +134,8 @@ def main() -> None:
         for k in range(args.repeat):
             bag = Path(tmp) / f"run{k}" if args.record else None
             wall, node_cpu, ctl_cpu = run_once(args.ticks, bag, args.controller, args.executor,
-                                               args.rig, args.best_effort)
+                                               args.rig, args.best_effort,
+                                               args.thread_priority)
             print(f"run {k + 1}: {wall:.3f} ms wall a tick (target <= 0.3 ms), CPU "
                   f"{node_cpu:.3f} ms node + {ctl_cpu:.3f} ms controller a tick; "
                   f"{1.0 / wall:.2f} x real time")

@@ -17,8 +17,16 @@ With --sensor-profile NAME every node runs that sensor profile (msg_docs/sensors
 --string-model lumped|distributed sets every node's string_model; --rate-only prints only
 the 1000 Hz rate and CPU.
 
+Beside each 1000 Hz run, a do-nothing 1 kHz sleeper in a third process (bench_wakeups.py)
+measures this machine's own wake-up floor over the same seconds, under the same load: a node
+cannot be more on time than that, so its figures are to be read against it.
+
+--thread-priority N runs the nodes with thread_priority:=N (their loop under SCHED_FIFO) and
+the benchmark's own thread at N too, as a controller under test on a real-time machine would.
+
 Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30] [--top-drive-mode torque]
          [--sensor-profile NAME] [--string-model distributed] [--rate-only]
+         [--thread-priority 50]
 """
 
 from __future__ import annotations
@@ -36,11 +44,15 @@ import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import TwistStamped, WrenchStamped
+from rclpy.experimental import EventsExecutor
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
+from drill_sim.ros.wakeups import run_at_priority
+
 BIN = Path(sys.executable).parent
 NODE_ARGS: list[str] = []       # parameters every node started here gets (sensors, string)
+EXECUTOR: list = []             # the benchmark's one executor, made at the first spin
 
 
 def cpu_seconds(pid: int) -> float:
@@ -56,7 +68,17 @@ def start(*args: str) -> subprocess.Popen:
 def spin(node, seconds: float) -> None:
     end = time.monotonic() + seconds
     while time.monotonic() < end:
-        rclpy.spin_once(node, timeout_sec=0.001)
+        spin_once(node, 0.001)
+
+
+def spin_once(node, timeout_s: float) -> None:
+    """The benchmark's own callbacks, under rclpy's EventsExecutor: the SingleThreadedExecutor
+    took ~0.6 of a core at 1 kHz, beside the node on a 2-core machine (its received periods
+    measured the benchmark's own delays as much as the node's)."""
+    if not EXECUTOR:
+        EXECUTOR.append(EventsExecutor())
+        EXECUTOR[0].add_node(node)
+    EXECUTOR[0].spin_once(timeout_sec=timeout_s)
 
 
 class TorqueController:
@@ -107,14 +129,17 @@ def rate_and_cpu(node, seconds: float, record: str = "", mode: str = "kinematic"
         float(kv.value) for kv in m.status[0].values if kv.key == "tick_period_p99_ms"), 10)
     end = time.monotonic() + 60
     while len(arrivals) < 2000 and time.monotonic() < end:
-        rclpy.spin_once(node, timeout_sec=0.01)
+        spin_once(node, 0.01)
     arrivals.clear()
     p99s.clear()
     cpu0, wall0 = cpu_seconds(proc.pid), time.monotonic()
+    floor = subprocess.Popen([sys.executable, str(Path(__file__).parent / "bench_wakeups.py"),
+                              "--seconds", f"{seconds:g}"], stdout=subprocess.PIPE, text=True)
     spin(node, seconds)
     cpu = (cpu_seconds(proc.pid) - cpu0) / (time.monotonic() - wall0)
     proc.send_signal(signal.SIGINT)
     proc.wait(timeout=20)
+    beside = floor.communicate(timeout=60)[0].strip()
     t = np.array(arrivals)
     periods = np.diff(t) * 1e3
     rate = (len(t) - 1) / (t[-1] - t[0])
@@ -127,6 +152,7 @@ def rate_and_cpu(node, seconds: float, record: str = "", mode: str = "kinematic"
           f"tick period p99 in the node per 1 s window: median {np.median(p99s):.3f} ms, "
           f"worst {max(p99s):.3f} ms; "
           f"node CPU {100 * cpu:.1f} % of one core")
+    print(f"  beside it, {beside}")
     return cpu
 
 
@@ -144,7 +170,7 @@ def latency(node, samples: int = 2000, record: str = "") -> None:
 
     node.create_subscription(JointState, f"{ns}/drill_sim/joint_states", on_joints, 1000)
     while pub.get_subscription_count() == 0:
-        rclpy.spin_once(node, timeout_sec=0.01)
+        spin_once(node, 0.01)
     spin(node, 1.0)
     msg = TwistStamped()
     msg.header.frame_id = "top_drive"
@@ -155,7 +181,7 @@ def latency(node, samples: int = 2000, record: str = "") -> None:
         pub.publish(msg)
         end = time.monotonic() + 0.5
         while state["value"] is not None and time.monotonic() < end:
-            rclpy.spin_once(node, timeout_sec=0.0005)
+            spin_once(node, 0.0005)
         spin(node, 0.002 + 0.0007 * (i % 3))            # vary the phase against the tick
     proc.send_signal(signal.SIGINT)
     proc.wait(timeout=20)
@@ -171,7 +197,7 @@ def max_speed(node, rate_hz: float, seconds: float = 10.0) -> None:
     node.create_subscription(Clock, "/clock", lambda m: clocks.append(
         (time.monotonic(), m.clock.sec + 1e-9 * m.clock.nanosec)), 1000)
     while len(clocks) < 100:
-        rclpy.spin_once(node, timeout_sec=0.01)
+        spin_once(node, 0.01)
     clocks.clear()
     spin(node, seconds)
     proc.send_signal(signal.SIGINT)
@@ -190,14 +216,21 @@ def main() -> None:
     parser.add_argument("--sensor-profile", default="ideal")
     parser.add_argument("--string-model", choices=("lumped", "distributed"), default=None)
     parser.add_argument("--rate-only", action="store_true")
+    parser.add_argument("--thread-priority", type=int, default=0, metavar="PRIORITY",
+                        help="the nodes' thread_priority (SCHED_FIFO), and the benchmark's "
+                        "own thread (subscriber, controller) at the same priority")
     args = parser.parse_args()
     NODE_ARGS.extend(["-p", f"sensor_profile:={args.sensor_profile}"])
+    if args.thread_priority:
+        NODE_ARGS.extend(["-p", f"thread_priority:={args.thread_priority}"])
     if args.string_model:
         NODE_ARGS.extend(["-p", f"string_model:={args.string_model}"])
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     rclpy.init()
     node = rclpy.create_node("drill_sim_bench")
+    if args.thread_priority and (why := run_at_priority(args.thread_priority)):
+        raise SystemExit(f"--thread-priority: {why}")
     if args.top_drive_mode == "torque":
         plain = rate_and_cpu(node, args.seconds, mode="torque")
         with tempfile.TemporaryDirectory() as tmp:

@@ -40,6 +40,7 @@ from .commands import CommandInbox
 from .recorder import SessionRecorder
 from .stopping import init_stoppable
 from .topics import message_class, raw_sender, rclpy_qos, service_class
+from .wakeups import run_at_priority
 
 SWITCH_INTERVAL_S = 5e-4
 SERVE_PERIOD_S = 1e-3        # max speed: services, parameters, diagnostics served this often
@@ -231,6 +232,25 @@ class RigNode(Node):
         self._live_at = [k for k, on in enumerate(live) if on]
         self._live_exact_at = [k for k in self._live_at if not measured[k]]
         self._live_measured_at = [k for k in self._live_at if measured[k]]
+
+    def take_thread_priority(self) -> None:
+        """``thread_priority`` > 0: this (the loop's) thread under SCHED_FIFO, in real time
+        and lockstep; not at max speed, whose loop never sleeps and would starve the machine's
+        other programs. Refused, the rig runs on and says why."""
+        priority = int(self.p["thread_priority"])
+        if not priority:
+            return
+        if self.pacer.max_speed and self.lockstep is None:
+            self.get_logger().info(f"thread_priority {priority} not taken at max speed (its "
+                                   "loop never sleeps: under SCHED_FIFO it would starve the "
+                                   "machine's other programs)")
+            return
+        refused = run_at_priority(priority)
+        if refused is None:
+            self.get_logger().info(f"ticking under SCHED_FIFO, priority {priority}")
+        else:
+            self.get_logger().warning(f"thread_priority {priority} not taken: {refused}; "
+                                      "ticking under the default scheduler")
 
     # ---- real time ---------------------------------------------------------------------
     def run_real_time(self, executor: EventsExecutor, stop) -> None:
@@ -451,6 +471,7 @@ def main(args: list[str] | None = None) -> int:
         executor = EventsExecutor()
         executor.add_node(node)
         node.rig.warm_up()   # load the compiled kernel before the first tick is due
+        node.take_thread_priority()
         # The loops serve the executor (EventsExecutor: a fifth of the CPU of the
         # SingleThreadedExecutor) with spin_once between their ticks.
         if node.lockstep is not None:

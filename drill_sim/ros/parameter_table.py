@@ -176,6 +176,11 @@ def specs(preset: Preset) -> list[Spec]:
         Spec("start_paused", False, "start paused: nothing is published until ~/pause false, "
              "so a controller can connect before the first tick",
              read_only="it applies at start only"),
+        Spec("thread_priority", 0, "real time and lockstep: the loop's thread under "
+             "SCHED_FIFO at this priority (ticks on time on a shared machine; needs root, "
+             "CAP_SYS_NICE or an rtprio limit, else a warning); 0: the default scheduler",
+             "", 0, 99, "0 (off) or a SCHED_FIFO priority 1-99",
+             read_only="the loop's thread is set at start; " + START_ONLY),
         Spec("qos_reliability", "reliable", "reliability of every rig topic",
              read_only="publishers and subscriptions are made with it; " + START_ONLY,
              choices=("reliable", "best_effort")),

@@ -177,3 +177,38 @@ def test_a_stalled_node_still_publishes_every_tick(ros):
     gaps = steps[(steps > 1) & (steps <= CATCH_UP_TICKS)]
     assert gaps.size == 0, f"samples missing after stalls: gaps of {gaps.tolist()} ticks"
     assert (steps == 1).mean() > 0.97 and steps.min() == 1
+
+
+def _policy(stat: str) -> tuple[int, int]:
+    """(scheduling policy, real-time priority) from a /proc .../stat line."""
+    fields = stat.rsplit(")", 1)[1].split()
+    return int(fields[38]), int(fields[37])          # fields 41 and 40 of proc(5)
+
+
+@pytest.mark.parametrize("mode", ["real_time", "max_speed"])
+def test_thread_priority_puts_the_loop_under_sched_fifo(ros, mode):
+    """thread_priority:=10: the loop's thread (the main one) under SCHED_FIFO 10, the
+    middleware's threads left as they were; or, where the system refuses, a warning saying
+    what would allow it. Not at max speed (a loop that never sleeps would starve the machine)."""
+    import os
+    from pathlib import Path
+    extra = ["-p", "publish_clock:=true", "-p", "max_speed:=true"] if mode == "max_speed" else []
+    seen: list[int] = []
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:=/prio_{mode}",
+                     "-p", "thread_priority:=10", *extra) as rig:
+        sub = ros.create_subscription(JointState, f"/prio_{mode}/drill_sim/joint_states",
+                                      lambda m: seen.append(1), 10)
+        wait_for(lambda: len(seen) > 20, ros, 30.0, "the rig's samples")
+        tasks = Path(f"/proc/{rig.proc.pid}/task")
+        policies = {int(t.name): _policy((t / "stat").read_text()) for t in tasks.iterdir()}
+        code, out = rig.stop()
+        ros.destroy_subscription(sub)
+    assert code == 0, out
+    main, others = policies.pop(rig.proc.pid), set(policies.values())
+    if mode == "max_speed":
+        assert "not taken at max speed" in out and main == (os.SCHED_OTHER, 0), out
+    elif "ticking under SCHED_FIFO, priority 10" in out:
+        assert main == (os.SCHED_FIFO, 10)
+        assert others == {(os.SCHED_OTHER, 0)}           # the middleware's threads: as they were
+    else:
+        assert "thread_priority 10 not taken" in out and main == (os.SCHED_OTHER, 0), out
