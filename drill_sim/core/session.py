@@ -189,8 +189,7 @@ def _rule_refusal(p: dict[str, object], rule: CommandRule, frame_id: str, value:
                   what: str) -> Refusal | None:
     if rule.mode and p.get("top_drive_mode", "kinematic") != rule.mode:
         return (f"{what} (top_drive_mode is {p.get('top_drive_mode', 'kinematic')})", value,
-                f"top_drive_mode = {rule.mode}: set it first (ros2 param set ... "
-                f"top_drive_mode {rule.mode})")
+                f"top_drive_mode = {rule.mode}: set the node's parameter first")
     high = p[rule.limit] if isinstance(rule.limit, str) else rule.limit
     return command_refusal(frame_id, value, high, what, rule.unit,
                            -high if rule.signed else 0.0)

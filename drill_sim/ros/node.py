@@ -52,6 +52,8 @@ LOCKSTEP_SERVE_PERIOD_S = 0.02
 # real time: which outputs have a subscriber is looked at this often (a publish to no one
 # still costs ~6 us, and there are 25 outputs); a new subscriber is served within it
 LIVE_REFRESH_PERIOD_S = 0.05
+# a command for the top-drive mode the drive left this recently [s] was in flight at the switch
+IN_FLIGHT_S = 0.5
 
 
 class RigNode(Node):
@@ -83,6 +85,7 @@ class RigNode(Node):
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
         self.commands = CommandInbox(self, self.p["qos_reliability"])
         self.superseded = 0                      # commands replaced within their tick
+        self._mode_left: tuple[str, float] | None = None    # top-drive mode left, wall time
         self._undecodable = self._lost_before = 0
         handlers = {"~/reset": self._on_reset, "~/pause": self._on_pause, "~/step": self._on_step}
         for t in rig_topics.SERVICES:
@@ -346,6 +349,9 @@ class RigNode(Node):
             if refusal is None:
                 accepted += 1
                 topics.add(c.topic.name)
+            elif self._in_flight(c.topic):
+                self.get_logger().info(f"dropped a {c.topic.name} command sent before the "
+                                       "drive left its mode", throttle_duration_sec=1.0)
             else:
                 what, value, expected = refusal
                 self.get_logger().warning(f"refused {what} = {value!r}: expected {expected}; "
@@ -354,6 +360,16 @@ class RigNode(Node):
         if accepted:
             self._cmd_wall = time.monotonic()
             self.superseded += accepted - len(topics)
+
+    def _in_flight(self, topic: RigTopic) -> bool:
+        """A command for the top-drive mode the drive left less than IN_FLIGHT_S ago: sent
+        before the switch, it crossed it on the way (a controller handing the drive back), so
+        it is dropped without a warning (and recorded; ``bag resim`` drops it too)."""
+        left = self._mode_left
+        if left is None or time.monotonic() - left[1] > IN_FLIGHT_S:
+            return False
+        rule = session.COMMANDS.get(topic.command)
+        return rule is not None and rule.mode == left[0]
 
     # ---- services ----------------------------------------------------------------------
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
@@ -410,6 +426,8 @@ class RigNode(Node):
             changed = session.apply_changes(self.rig, self.p, new)
         except ParameterError as exc:
             return SetParametersResult(successful=False, reason=str(exc))
+        if new["top_drive_mode"] != self.p["top_drive_mode"]:
+            self._mode_left = (self.p["top_drive_mode"], time.monotonic())
         self.p = new
         if changed & set(session.RIG_FIELDS):
             self.get_logger().info(f"rig figures now: {session.figures_line(self.rig.params)}")
