@@ -256,9 +256,9 @@ def _summary(series: RigSeries, whence: str, scenario: str, preset: str) -> None
     print(f"drill_sim run: scenario '{scenario}' on preset '{preset}', {elapsed:.3f} s "
           f"simulated, {whole['samples']} samples ({whence})")
     if elapsed > 0:                       # fewer than rate_hz: ticks the machine delayed
-        print(f"  samples a simulated s  {whole['samples'] / elapsed:8.0f} (rate_hz ticks; a "
-              "real-time tick the machine delays advances the missed ticks at once, counted "
-              "on /diagnostics)")
+        print(f"  samples a simulated s  {whole['samples'] / elapsed:8.0f} (rate_hz ticks; "
+              "fewer where the machine stalled the rig more than 5 ticks: counted on "
+              "/diagnostics)")
     print(f"  hole drilled             {series.hole_depth_m[-1]:8.3f} m")
     print(f"  last {last['duration_s']:4.1f} s: mean bit speed "
           f"{last['mean_bit_speed_rad_s'] / RPM:6.1f} rpm, WOB {last['mean_wob_n'] / 1e3:6.1f} kN, "

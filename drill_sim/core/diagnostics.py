@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .lockstep import LockstepStatus
-from .pacing import TickStats
+from .pacing import CATCH_UP_TICKS, TickStats
 from .rig import RigSample
 
 OK, WARN, ERROR = 0, 1, 2      # the levels of diagnostic_msgs/DiagnosticStatus
@@ -91,9 +91,13 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
         if ticks.overruns and not max_speed and ticks.ticks < SLOW_TICKS * rate_hz * ticks.wall_s:
             found.append((WARN, f"tick rate {ticks.rate_hz:.0f} Hz below {rate_hz:g} Hz"))
         if ticks.stalls and not max_speed:
+            due = round(ticks.period_max_s * rate_hz)       # ticks the longest stall made due
+            missed = due - 1
+            how = ("their missed ticks published late" if due <= CATCH_UP_TICKS else
+                   f"the longest advanced its {missed} missed ticks with one sample (a stall "
+                   f"of up to {CATCH_UP_TICKS} ticks publishes each, late)")
             found.append((WARN, f"{ticks.stalls} ticks stalled in the last {ticks.wall_s:.1f} s "
-                                f"(longest {ticks.period_max_s * 1e3:.1f} ms); the rig "
-                                "caught up the ticks they missed, published late"))
+                                f"(longest {ticks.period_max_s * 1e3:.1f} ms); {how}"))
         if lockstep is not None and lockstep.waiting_s > lockstep.timeout_s:
             found.append((WARN, f"lockstep: waiting {lockstep.waiting_s:.1f} s for "
                                 f"{', '.join(lockstep.missing)} stamped "
