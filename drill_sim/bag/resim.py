@@ -132,7 +132,10 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
         handlers[m.topic](m.data)
         if progress is not None and m.topic == topics["joints"]:
             progress(result.samples / total)
-    result.problems = list(dict.fromkeys(found.problems + walked + bag.repaired()[0]))
+    # a repair's lost end (a crash) is only a note of the bag, but the session went on past
+    # it: the part kept is all that was compared
+    gaps, lost_ends = bag.repaired()
+    result.problems = list(dict.fromkeys(found.problems + walked + gaps + lost_ends))
     return result
 
 

@@ -107,6 +107,24 @@ def test_resim_never_claims_an_exact_match_over_a_partial_bag(tmp_path):
     assert done.returncode == (0 if r["matched"] else 1)
 
 
+def test_resim_of_a_repaired_crash_compares_only_the_part_kept(tmp_path):
+    """A recording cut in the middle (a crash) and then repaired is sound up to the cut, but
+    the session went on: resim says the part kept matches, not that it reproduced the session
+    (before the repair it said the same of the cut bag)."""
+    bag = tmp_path / "session"
+    session_bag(bag, 800)
+    path = bag / "session_0.mcap"
+    start, end = _chunk_bodies(path)[3]
+    path.write_bytes(path.read_bytes()[:(start + end) // 2])
+    (bag / "metadata.yaml").unlink()
+    assert main(["bag", "repair", str(bag)]) == 0
+    done = _resim(bag, "--json")
+    r = json.loads(done.stdout)
+    assert done.returncode == 1 and r["matched"] and not r["exact"], done.stdout
+    assert any("was repaired" in p for p in r["problems"]), r["problems"]
+    assert _resim(bag, "--partial").returncode == 0
+
+
 def _resim(bag, *extra: str) -> subprocess.CompletedProcess:
     return subprocess.run([installed("drill_sim"), "bag", "resim", str(bag), *extra],
                           capture_output=True, text=True, timeout=300)
