@@ -47,16 +47,18 @@ def _run(*args: str) -> subprocess.CompletedProcess:
 
 def test_statuses_rows_keys_and_levels(tmp_path):
     bag = _bag(tmp_path / "d")
-    proc = _run(str(bag), "--name", "rig", "--keys", "overruns,sim_time_s,nope")
-    assert proc.returncode == 0, proc.stderr
+    proc = _run(str(bag), "--name", "rig", "--keys", "overruns,sim_time_s,overrun")
+    assert proc.returncode == 2, proc.stderr               # a key no status has: said so
+    assert "no status shown has a value 'overrun' (did you mean 'overruns'?)" in proc.stderr
     lines = proc.stdout.splitlines()
     assert lines[0].split("\t") == ["t_s", "level", "name", "message", "overruns",
-                                    "sim_time_s", "nope"]
+                                    "sim_time_s", "overrun"]
     rows = [line.split("\t") for line in lines[1:5]]
     assert [r[0] for r in rows] == ["0.000", "1.000", "2.000", "3.000"]   # log time from first
     assert [r[1] for r in rows] == ["OK", "OK", "WARN", "OK"]
     assert [r[4] for r in rows] == ["0", "3", "6", "9"] and {r[6] for r in rows} == {"-"}
     assert "4 statuses" in proc.stdout and "sim_time_s" in lines[-1]     # the last's keys
+    assert _run(str(bag), "--name", "rig", "--keys", "overruns").returncode == 0
     every = [json.loads(line) for line in _run(str(bag), "--json").stdout.splitlines()]
     assert len(every) == 8 and every[1]["level"] == "ERROR" and every[1]["values"] == {"u": "ü"}
     assert every[6]["stamp_s"] == 1003.0 and every[6]["hardware_id"] == "base"
@@ -66,7 +68,11 @@ def test_a_damaged_message_is_reported_and_a_wrong_topic_refused(tmp_path):
     bag = _bag(tmp_path / "d", corrupt=True)
     proc = _run(str(bag), "--name", "rig")
     assert proc.returncode == 1
-    assert "3 statuses" in proc.stdout and "cannot hold this DiagnosticArray" in proc.stdout
+    assert "3 statuses" in proc.stdout
+    assert proc.stderr.count("cannot hold this DiagnosticArray") == 1     # once, on stderr
+    proc = _run(str(bag), "--json")                        # stdout stays JSON lines
+    assert proc.returncode == 1 and all(json.loads(line) for line in proc.stdout.splitlines())
+    assert "problem:" in proc.stderr
     for topic, expected in (("/nope", "has no topic /nope: expected one of its " + TYPE),
                             ("/drill_sim/bit/stick_slip", "is std_msgs/msg/Bool")):
         proc = _run(str(bag), "--topic", topic)

@@ -10,7 +10,9 @@ in view.
 from __future__ import annotations
 
 import argparse
+import difflib
 import json
+import sys
 from pathlib import Path
 
 from ...bag.bag import Bag
@@ -51,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"{args.topic} in {args.bag} is {types[args.topic]}: expected "
                              f"a {TYPE} topic")
         rows, last, t0 = 0, None, None
+        seen: set[str] = set()                 # every value key of the statuses shown
         if not args.json:
             print("\t".join(["t_s", "level", "name", "message", *keys]))
         for m in bag.messages({args.topic}, problems):
@@ -65,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
                 if args.name not in st.name:
                     continue
                 rows, last, values = rows + 1, st, dict(st.values)
+                seen.update(values)
                 level = LEVELS.get(st.level, str(st.level))
                 if args.json:
                     print(json.dumps({"t_s": round(t_s, 6), "stamp_s": sec + nanosec * 1e-9,
@@ -81,6 +85,12 @@ def run(args: argparse.Namespace) -> int:
                   f"last ({last.name}):")
             for k, v in last.values:
                 print(f"  {k:<28} {v}")
-    for p in problems:
-        print(f"problem: {p}")
-    return 1 if problems else 0
+    for p in dict.fromkeys(problems):
+        print(f"problem: {p}", file=sys.stderr)
+    unknown = [k for k in keys if k not in seen] if rows else []
+    for k in unknown:
+        near = difflib.get_close_matches(k, sorted(seen), n=1)
+        print(f"--keys: no status shown has a value '{k}'"
+              f"{f' (did you mean {near[0]!r}?)' if near else ''}; its keys: "
+              f"{', '.join(sorted(seen))}", file=sys.stderr)
+    return 2 if unknown else 1 if problems else 0
