@@ -39,6 +39,15 @@ class Windowed:
     def __init__(self, chunks: Iterable[tuple[np.ndarray, np.ndarray]], window: Window) -> None:
         self.chunks, self.window = chunks, window
         self.origin_ns: int | None = None
+        self.latest_ns: int | None = None           # the latest stamp met, in or out
+
+    def span(self) -> str:
+        """The stamps met, in the window's words (after the first sample), for a window
+        that came out empty."""
+        if self.origin_ns is None or self.latest_ns is None:
+            return "the topic has no samples"
+        return (f"its samples span 0 to {(self.latest_ns - self.origin_ns) * 1e-9:.3f} s "
+                "after the first")
 
     def __iter__(self) -> Iterator[tuple[np.ndarray, np.ndarray]]:
         w = self.window
@@ -49,6 +58,8 @@ class Windowed:
                 continue
             if self.origin_ns is None:
                 self.origin_ns = int(ns[0])
+            top = int(ns.max())
+            self.latest_ns = top if self.latest_ns is None else max(self.latest_ns, top)
             if w.last_s is None:
                 t = (ns - self.origin_ns) * 1e-9
                 keep = np.ones(ns.size, bool)
@@ -58,7 +69,6 @@ class Windowed:
                     keep &= t <= w.end_s
                 yield (ns, values) if keep.all() else (ns[keep], values[keep])
                 continue
-            top = int(ns.max())
             latest = top if latest is None else max(latest, top)
             held.append((ns, values))
             span = round(w.last_s * 1e9)

@@ -138,8 +138,11 @@ def joint_topic(bag: Bag, topic: str | None = None) -> str:
     if topic is None and len(outputs) == 1:
         joint_topics = outputs
     if not joint_topics:
+        found = sorted(t for t, kind in bag.topic_types().items() if kind == JOINT_STATE)
         raise BagError(f"bag {bag.path}: no {JOINT_STATE} topic"
-                       f"{'' if topic is None else ' ' + topic} to read the rig from")
+                       f"{'' if topic is None else ' ' + topic} to read the rig from"
+                       + (f" (its {JOINT_STATE} topics: {', '.join(found)})"
+                          if topic is not None and found else ""))
     if len(joint_topics) > 1:
         raise BagError(f"bag {bag.path}: several joint_states topics "
                        f"({', '.join(joint_topics)}); choose one with --topic")

@@ -60,6 +60,13 @@ def test_metrics_last_seconds(tmp_path, capsys):
     assert 499 <= m["samples"] <= 501 and m["duration_s"] == pytest.approx(0.5, abs=2e-3)
     assert main(["bag", "metrics", str(bag), "--last", "1", "--start", "0"]) == 2
     assert main(["bag", "metrics", str(bag), "--last", "0"]) == 2
+    capsys.readouterr()
+    # a window past the end says where the samples are; a wrong topic, which there are
+    assert main(["bag", "metrics", str(bag), "--start", "100"]) != 0
+    assert "its samples span 0 to 2.999 s after the first" in capsys.readouterr().err
+    assert main(["bag", "metrics", str(bag), "--topic", "/drill_sim/joint_state"]) != 0
+    assert "(its sensor_msgs/msg/JointState topics: /drill_sim/joint_states)" in \
+        capsys.readouterr().err
 
 
 def test_export_writes_time_after_the_first_sample_at_full_precision(tmp_path, capsys):

@@ -8,6 +8,7 @@ import json
 
 import numpy as np
 
+from ...bag.errors import BagError
 from ...bag.rig_stats import RigStats
 from ...bag.series import columns
 from . import window
@@ -34,6 +35,8 @@ def run(args: argparse.Namespace) -> int:
     status = s.verdict(args, stats.problems())
     if status:
         return status
+    if stats.n == 0:
+        raise BagError(f"{s.topic}: no samples in the window; {s.chunks.span()}")
     m = stats.result()
     if motor_n:                        # the top drive's motor, when the bag has its torque
         m["mean_motor_torque_nm"] = motor_sum_nm / motor_n
