@@ -16,6 +16,7 @@ then stops answering, so the rig waits).
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 
@@ -92,27 +93,36 @@ def main() -> int:
     parser.add_argument("--resume", action="store_true")
     parser.add_argument("--executor", choices=("events", "single"), default="events")
     args = parser.parse_args()
-    # Ctrl-C is a KeyboardInterrupt between callbacks, not rclpy shutting the context down
-    # under a callback that is publishing: the controller stops cleanly and says what it did
+    # Ctrl-C and SIGTERM only raise a flag, looked at between spins: neither rclpy shutting
+    # the context down under a callback that is publishing, nor a KeyboardInterrupt inside
+    # the executor's C++ (which surfaced as a RuntimeError): the controller stops cleanly
+    # and says what it did
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    stop: list[int] = []
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda signum, frame: stop.append(signum))
     node = BitSpeedPI(args)
     executor = EventsExecutor() if args.executor == "events" else SingleThreadedExecutor()
     executor.add_node(node)
+
+    def spin_until(done, timeout_s: float = 0.01) -> bool:
+        while not stop and not done():
+            executor.spin_once(timeout_sec=timeout_s)
+        return not stop
+
     try:
-        while node.pub.get_subscription_count() == 0 or node.sub.get_publisher_count() == 0:
-            executor.spin_once(timeout_sec=0.01)
+        if not spin_until(lambda: node.pub.get_subscription_count() > 0
+                          and node.sub.get_publisher_count() > 0):
+            return 0
         if args.resume:
             client = node.create_client(SetBool, f"{args.rig}/pause")
-            while not client.service_is_ready():
-                executor.spin_once(timeout_sec=0.01)
+            if not spin_until(client.service_is_ready):
+                return 0
             future = client.call_async(SetBool.Request(data=False))
-            while not future.done():
-                executor.spin_once(timeout_sec=0.01)
+            if not spin_until(future.done):
+                return 0
         print("connected", flush=True)
-        while not args.ticks or not node.done:
-            executor.spin_once(timeout_sec=0.1)
-    except KeyboardInterrupt:
-        pass
+        spin_until(lambda: bool(args.ticks) and node.done, 0.1)
     finally:
         print(f"answered {node.answered} in {node.last_wall - node.first_wall:.6f} s",
               flush=True)
