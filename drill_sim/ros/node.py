@@ -50,7 +50,7 @@ REAL_TIME_SERVE_PERIOD_S = 5e-3
 # lockstep: served this often [s] (a spin of the executor costs ~0.1 ms, a third of a tick)
 LOCKSTEP_SERVE_PERIOD_S = 0.02
 # real time: which outputs have a subscriber is looked at this often (a publish to no one
-# still costs ~6 us, and there are 25 outputs); a new subscriber is served within it
+# still costs ~6 us, and there are 16 outputs, 17 with /clock); a new subscriber is served within it
 LIVE_REFRESH_PERIOD_S = 0.05
 # a command for the top-drive mode the drive left this recently [s] was in flight at the switch
 IN_FLIGHT_S = 0.5
@@ -224,7 +224,7 @@ class RigNode(Node):
         """Between back-to-back ticks: services, parameters and diagnostics; and which outputs
         have a subscriber now (the others are neither published, nor encoded unless
         recorded, until they have one: a publish to no one costs ~6 us, an encoding ~5 us, and
-        there are 25 outputs)."""
+        there are 16 outputs, 17 with /clock)."""
         executor.spin_once(timeout_sec=0.0)
         self._set_live([p.get_subscription_count() > 0 for p in self._outputs])
 

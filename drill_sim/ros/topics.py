@@ -52,7 +52,7 @@ def raw_sender(publisher: Publisher) -> Callable[[bytes], None]:
 
     The wrapper enters the handle's use guard and checks the type on every call: ~10 us of a
     ~20 us raw publish here (measured from another process's subscriber), which at 1 kHz and
-    25 outputs was a quarter of a core. The guard keeps a publisher from being destroyed
+    16 outputs was a quarter of a core. The guard keeps a publisher from being destroyed
     while another thread publishes; the rig publishes and destroys from one thread."""
     return publisher.handle.publish_raw
 

@@ -39,7 +39,7 @@ class RigEncoders:
              at: Sequence[int]) -> list[bytes]:
         """The messages of the topics at ``at`` (indices into ``topics``), in that order,
         as ``sample`` makes them: the node encodes only the outputs it publishes (walking
-        all 25 encoders with a flag each cost ~4 us a tick more). ``m`` is needed (or made
+        all 16 encoders with a flag each cost ~4 us a tick more). ``m`` is needed (or made
         from ``s``) only if one of them is a ``~/measured/`` topic."""
         encoders, measured = self._encoders, self._measured
         if m is None and any(measured[k] for k in at):
