@@ -4,7 +4,8 @@ rig does not compete for the CPU with these timing checks."""
 
 from __future__ import annotations
 
-import select
+import queue
+import threading
 import time
 
 import numpy as np
@@ -26,17 +27,37 @@ def test_bad_startup_parameter_exits_with_a_clear_message(ros):
     assert code == 2 and "initial_state" in out and "Traceback" not in out
 
 
+_LINES: dict[int, queue.Queue] = {}
+
+
+def _pump(stream, lines: queue.Queue) -> None:
+    """Every line of ``stream`` into ``lines``, then "" once it ends (or is closed)."""
+    try:
+        for line in iter(stream.readline, ""):
+            lines.put(line)
+    except (OSError, ValueError):
+        pass
+    lines.put("")
+
+
 def _line_with(proc: NodeProcess, text: str, timeout_s: float = 30.0) -> str | None:
-    """The first line of the process's output that holds ``text``, read as it comes."""
+    """The first line of the process's output that holds ``text``, read as it comes (by a
+    thread: a select() on the pipe misses lines already in the reader's buffer when several
+    came in one write)."""
+    lines = _LINES.get(proc.proc.pid)
+    if lines is None:
+        lines = _LINES[proc.proc.pid] = queue.Queue()
+        threading.Thread(target=_pump, args=(proc.proc.stdout, lines), daemon=True).start()
     end = time.monotonic() + timeout_s
-    while time.monotonic() < end:
-        ready, _, _ = select.select([proc.proc.stdout], [], [], 0.5)
-        if ready:
-            line = proc.proc.stdout.readline()
-            if text in line:
-                return line
-            if not line:                              # the process ended
-                return None
+    while (left := end - time.monotonic()) > 0:
+        try:
+            line = lines.get(timeout=left)
+        except queue.Empty:
+            return None
+        if text in line:
+            return line
+        if not line:                                  # the process ended
+            return None
     return None
 
 
