@@ -21,6 +21,7 @@ from ..bag.errors import BagError
 from ..bag.series import RigSeries, rig_series
 from ..core import RPM, load_preset
 from ..core.diagnostics import drilling_regime
+from ..core.pacing import CATCH_UP_TICKS
 from ..core.scenario import load_scenario
 from .checks import in_range, new_bag, number, plot_file
 from .errors import UsageError
@@ -257,8 +258,8 @@ def _summary(series: RigSeries, whence: str, scenario: str, preset: str) -> None
           f"simulated, {whole['samples']} samples ({whence})")
     if elapsed > 0:                       # fewer than rate_hz: ticks the machine delayed
         print(f"  samples a simulated s  {whole['samples'] / elapsed:8.0f} (rate_hz ticks; "
-              "fewer where the machine stalled the rig more than 5 ticks: counted on "
-              "/diagnostics)")
+              f"fewer where the machine stalled the rig more than {CATCH_UP_TICKS} ticks: "
+              "counted on /diagnostics)")
     print(f"  hole drilled             {series.hole_depth_m[-1]:8.3f} m")
     print(f"  last {last['duration_s']:4.1f} s: mean bit speed "
           f"{last['mean_bit_speed_rad_s'] / RPM:6.1f} rpm, WOB {last['mean_wob_n'] / 1e3:6.1f} kN, "

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .lockstep import LockstepStatus
-from .pacing import CATCH_UP_TICKS, TickStats
+from .pacing import CATCH_UP_TICKS, TickStats, each_sampled
 from .rig import RigSample
 
 OK, WARN, ERROR = 0, 1, 2      # the levels of diagnostic_msgs/DiagnosticStatus
@@ -93,7 +93,7 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
         if ticks.stalls and not max_speed:
             due = round(ticks.period_max_s * rate_hz)       # ticks the longest stall made due
             missed = due - 1
-            how = ("their missed ticks published late" if due <= CATCH_UP_TICKS else
+            how = ("their missed ticks published late" if each_sampled(due) else
                    f"the longest advanced its {missed} missed ticks with one sample (a stall "
                    f"of up to {CATCH_UP_TICKS} ticks publishes each, late)")
             found.append((WARN, f"{ticks.stalls} ticks stalled in the last {ticks.wall_s:.1f} s "

@@ -30,6 +30,12 @@ OVERRUN_PERIODS = 1.5    # a tick later than this many periods is an overrun
 CATCH_UP_TICKS = 5
 
 
+def each_sampled(ticks: int) -> bool:
+    """Whether a wake-up that made ``ticks`` due (at real-time factors up to 1) publishes a
+    sample for each: the rule ``Pacer.samples`` follows and ``/diagnostics`` reports."""
+    return ticks <= CATCH_UP_TICKS
+
+
 @dataclass(frozen=True)
 class TickStats:
     """The ticks of one diagnostics window."""
@@ -161,7 +167,7 @@ class Pacer:
         the sensors and the recording, and the run is the one an undelayed machine gives with
         the same commands. Above factor 1 (ceil(factor) ticks a wake-up by design), at max
         speed and after a longer stall, one sample for all."""
-        if ticks <= 1 or ticks > CATCH_UP_TICKS or self.max_speed or self.real_time_factor > 1:
+        if ticks <= 1 or not each_sampled(ticks) or self.max_speed or self.real_time_factor > 1:
             return (ticks,) if ticks > 0 else ()
         return (1,) * ticks
 

@@ -8,8 +8,9 @@ real-time loop and each timed middleware wait (an rcl wait of zero timeout took 
 that creates them, so it is set before rclpy starts the middleware's threads.
 
 Under the default scheduler a waking thread may wait for another process's time slice: on a
-shared 2-core machine the node's tick period p99 was 1.06-1.48 ms, 1.04-1.06 ms under
-SCHED_FIFO (``benchmarks/bench_node.py``). ros2_control's control loop does the same (its
+shared 2-core machine the node's tick period p99 (median of 1 s windows) was 1.06-1.71 ms,
+1.04-1.12 ms under SCHED_FIFO where the machine's own floor allowed it
+(``benchmarks/bench_node.py``). ros2_control's control loop does the same (its
 ``thread_priority``, 50).
 """
 
