@@ -26,9 +26,13 @@ floor rig) best effort too: no acknowledgements or heartbeats on either side.
 ``--thread-priority N``: the node with ``thread_priority:=N`` (its loop under SCHED_FIFO) and
 the controller under ``chrt -f N``.
 
+``--cpu-wakeup-latency-us N``: the node with ``cpu_wakeup_latency_us:=N`` (no idle core sleeps
+deeper than N us while it runs; 0: they poll, so neither process waits for its core to wake);
+with ``--rig floor`` the benchmark holds that request itself.
+
 Run: .venv/bin/python benchmarks/bench_lockstep.py [--ticks 5000] [--record] [--repeat 3]
          [--controller lean|rclpy] [--executor waitset|events|single] [--rig node|floor]
-         [--best-effort] [--thread-priority 50]
+         [--best-effort] [--thread-priority 50] [--cpu-wakeup-latency-us 0]
          (--executor: the lean controller's wait, or the rclpy controller's executor)
 """
 
@@ -42,6 +46,8 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+from drill_sim.ros.wakeups import CpuLatencyRequest
 
 BIN = Path(sys.executable).parent
 CONTROLLERS = {"lean": Path(__file__).resolve().parent / "lean_controller.py",
@@ -57,7 +63,8 @@ def _cpu_s(pid: int) -> float:
 
 def run_once(ticks: int, record: Path | None, controller: str,
              executor: str, rig: str = "node",
-             best_effort: bool = False, priority: int = 0) -> tuple[float, float, float]:
+             best_effort: bool = False, priority: int = 0,
+             latency_us: int = -1) -> tuple[float, float, float]:
     """(wall ms, node CPU ms, controller CPU ms) per lockstep tick."""
     qos = ["--best-effort"] if best_effort else []
     if rig == "floor":
@@ -71,6 +78,8 @@ def run_once(ticks: int, record: Path | None, controller: str,
         args += ["-p", f"record:={record}"]
     if priority and rig == "node":
         args += ["-p", f"thread_priority:={priority}"]
+    if latency_us >= 0 and rig == "node":
+        args += ["-p", f"cpu_wakeup_latency_us:={latency_us}"]
     chrt = ["chrt", "-f", str(priority)] if priority else []
     node = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
@@ -98,6 +107,10 @@ def run_once(ticks: int, record: Path | None, controller: str,
     return wall_s * per, (cpu_node - cpu_node0) * per, (cpu_ctl - cpu_ctl0) * per
 
 
+def latency_note(latency_us: int) -> str:
+    return f", idle cores held to {latency_us} us wake-ups" if latency_us >= 0 else ""
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--ticks", type=int, default=5000)
@@ -115,6 +128,9 @@ def main() -> None:
     parser.add_argument("--thread-priority", type=int, default=0, metavar="PRIORITY",
                         help="the node's thread_priority (its loop under SCHED_FIFO) and the "
                         "controller under chrt -f PRIORITY")
+    parser.add_argument("--cpu-wakeup-latency-us", type=int, default=-1, metavar="US",
+                        help="the node's cpu_wakeup_latency_us (0: idle cores poll while it "
+                        "runs; needs root); with --rig floor held by the benchmark")
     args = parser.parse_args()
     args.executor = args.executor or ("waitset" if args.controller == "lean" else "events")
     if args.rig == "floor" and (args.record or args.controller != "lean"):
@@ -126,16 +142,22 @@ def main() -> None:
     print(f"lockstep, 1000 Hz, one PI controller in another process, {args.ticks} ticks"
           f"{', recording' if args.record else ''}"
           f"{f', SCHED_FIFO {args.thread_priority}' if args.thread_priority else ''}"
+          f"{latency_note(args.cpu_wakeup_latency_us)}"
           f", rig {args.rig}, controller {args.controller} "
           f"({args.executor}), {'best effort' if args.best_effort else 'reliable'}; "
           "load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    request = (CpuLatencyRequest(args.cpu_wakeup_latency_us)
+               if args.rig == "floor" and args.cpu_wakeup_latency_us >= 0 else None)
+    if request is not None and not request.held:
+        raise SystemExit(f"--cpu-wakeup-latency-us: {request.refused}")
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.repeat):
             bag = Path(tmp) / f"run{k}" if args.record else None
             wall, node_cpu, ctl_cpu = run_once(args.ticks, bag, args.controller, args.executor,
                                                args.rig, args.best_effort,
-                                               args.thread_priority)
+                                               args.thread_priority,
+                                               args.cpu_wakeup_latency_us)
             print(f"run {k + 1}: {wall:.3f} ms wall a tick (target <= 0.3 ms), CPU "
                   f"{node_cpu:.3f} ms node + {ctl_cpu:.3f} ms controller a tick; "
                   f"{1.0 / wall:.2f} x real time")

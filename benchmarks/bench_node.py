@@ -23,10 +23,13 @@ cannot be more on time than that, so its figures are to be read against it.
 
 --thread-priority N runs the nodes with thread_priority:=N (their loop under SCHED_FIFO) and
 the benchmark's own thread at N too, as a controller under test on a real-time machine would.
+--cpu-wakeup-latency-us N runs the nodes with cpu_wakeup_latency_us:=N (no idle core of the
+machine sleeps deeper than N us while a node runs; 0: they poll), which the benchmark, its
+controller and the floor sleeper beside then share, as on a machine set up for real time.
 
 Run: .venv/bin/python benchmarks/bench_node.py [--seconds 30] [--top-drive-mode torque]
          [--sensor-profile NAME] [--string-model distributed] [--rate-only]
-         [--thread-priority 50]
+         [--thread-priority 50] [--cpu-wakeup-latency-us 0]
 """
 
 from __future__ import annotations
@@ -219,8 +222,13 @@ def main() -> None:
     parser.add_argument("--thread-priority", type=int, default=0, metavar="PRIORITY",
                         help="the nodes' thread_priority (SCHED_FIFO), and the benchmark's "
                         "own thread (subscriber, controller) at the same priority")
+    parser.add_argument("--cpu-wakeup-latency-us", type=int, default=-1, metavar="US",
+                        help="the nodes' cpu_wakeup_latency_us (0: idle cores poll while a "
+                        "node runs; needs root)")
     args = parser.parse_args()
     NODE_ARGS.extend(["-p", f"sensor_profile:={args.sensor_profile}"])
+    if args.cpu_wakeup_latency_us >= 0:
+        NODE_ARGS.extend(["-p", f"cpu_wakeup_latency_us:={args.cpu_wakeup_latency_us}"])
     if args.thread_priority:
         NODE_ARGS.extend(["-p", f"thread_priority:={args.thread_priority}"])
     if args.string_model:

@@ -8,9 +8,12 @@ hold its targets (>= 99.5 % of ticks on time, p99 period <= 1.2 ms) on a machine
 misses them: compare `bench_node.py` with this, run beside it (it prints this first).
 
 --fifo PRIORITY sleeps under SCHED_FIFO at that priority (root or CAP_SYS_NICE; on a real-time
-kernel this is the figure that counts).
+kernel this is the figure that counts). --cpu-wakeup-latency-us N holds the kernel's CPU
+latency request at N us while it measures (as the node's cpu_wakeup_latency_us; 0: idle cores
+poll; root).
 
 Run: .venv/bin/python benchmarks/bench_wakeups.py [--seconds 15] [--fifo 50]
+         [--cpu-wakeup-latency-us 0]
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drill_sim.ros.wakeups import tighten_timer_slack
+from drill_sim.ros.wakeups import CpuLatencyRequest, tighten_timer_slack
 
 PERIOD_S = 1e-3
 
@@ -71,13 +74,26 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=15.0)
     parser.add_argument("--fifo", type=int, default=0, metavar="PRIORITY",
                         help="sleep under SCHED_FIFO at this priority (1-99)")
+    parser.add_argument("--cpu-wakeup-latency-us", type=int, default=-1, metavar="US",
+                        help="hold the CPU latency request at this while measuring (0: idle "
+                        "cores poll)")
     args = parser.parse_args()
+    how = [f"SCHED_FIFO {args.fifo}"] if args.fifo else []
+    request = None
+    if args.cpu_wakeup_latency_us >= 0:
+        request = CpuLatencyRequest(args.cpu_wakeup_latency_us)
+        if not request.held:
+            raise SystemExit(f"--cpu-wakeup-latency-us: {request.refused}")
+        how.append(f"idle cores held to {args.cpu_wakeup_latency_us} us wake-ups")
     try:
         f = floor(args.seconds, args.fifo)
     except PermissionError:
         raise SystemExit("--fifo: this user may not use SCHED_FIFO (needs root, CAP_SYS_NICE "
                          "or an rtprio limit)") from None
-    print(f.line(args.seconds, f" (SCHED_FIFO {args.fifo})" if args.fifo else ""))
+    finally:
+        if request is not None:
+            request.close()
+    print(f.line(args.seconds, f" ({', '.join(how)})" if how else ""))
 
 
 if __name__ == "__main__":

@@ -69,14 +69,17 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
                paused: bool, record_error: str | None, command_age_s: float,
                command_timeout_s: float, rate_hz: float, max_speed: bool,
                sim_time_s: float, commands: CommandCounts = CommandCounts(),
-               lockstep: LockstepStatus | None = None) -> Status:
+               lockstep: LockstepStatus | None = None,
+               real_time_factor: float = 1.0) -> Status:
     """The status over one diagnostics window. Conditions: ERROR when recording failed;
     WARN, while running, when ticks overran in real-time mode and fewer than SLOW_TICKS of
     ``rate_hz`` [Hz] (the timer ticks expected to publish) came, when real-time ticks
     stalled in the window, when commands were lost in the window, when no command came for
     ``command_timeout_s`` [s], and in lockstep when a tick waited longer than its timeout;
     ``paused`` (OK) while paused. ``metrics``: the rig's window metrics (``ssi``,
-    ``stick_fraction``, ``bounce_fraction``); ``sim_time_s``: session time [s]."""
+    ``stick_fraction``, ``bounce_fraction``); ``sim_time_s``: session time [s];
+    ``real_time_factor``: the one asked (a stall's ticks are published each at factors up
+    to 1, ``pacing.each_sampled``)."""
     name = drilling_regime(ssi=metrics["ssi"],
                            stuck=metrics["stick_fraction"] > 0.0 or sample.stick_slip,
                            off_bottom_fraction=metrics["bounce_fraction"],
@@ -91,11 +94,16 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
         if ticks.overruns and not max_speed and ticks.ticks < SLOW_TICKS * rate_hz * ticks.wall_s:
             found.append((WARN, f"tick rate {ticks.rate_hz:.0f} Hz below {rate_hz:g} Hz"))
         if ticks.stalls and not max_speed:
-            due = round(ticks.period_max_s * rate_hz)       # ticks the longest stall made due
-            missed = due - 1
-            how = ("their missed ticks published late" if each_sampled(due) else
-                   f"the longest advanced its {missed} missed ticks with one sample (a stall "
-                   f"of up to {CATCH_UP_TICKS} ticks publishes each, late)")
+            # ticks the longest stall made due (rate_hz: the wake-ups expected a second)
+            due = round(ticks.period_max_s * rate_hz * max(1.0, real_time_factor))
+            if real_time_factor > 1.0:
+                how = (f"the longest advanced its {due} ticks with one sample (above "
+                       "real-time factor 1 every wake-up advances its ticks with one)")
+            elif each_sampled(due, real_time_factor):
+                how = "their missed ticks published late"
+            else:
+                how = (f"the longest advanced its {due - 1} missed ticks with one sample (a "
+                       f"stall of up to {CATCH_UP_TICKS} ticks publishes each, late)")
             found.append((WARN, f"{ticks.stalls} ticks stalled in the last {ticks.wall_s:.1f} s "
                                 f"(longest {ticks.period_max_s * 1e3:.1f} ms); {how}"))
         if lockstep is not None and lockstep.waiting_s > lockstep.timeout_s:

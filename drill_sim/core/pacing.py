@@ -30,10 +30,11 @@ OVERRUN_PERIODS = 1.5    # a tick later than this many periods is an overrun
 CATCH_UP_TICKS = 5
 
 
-def each_sampled(ticks: int) -> bool:
-    """Whether a wake-up that made ``ticks`` due (at real-time factors up to 1) publishes a
-    sample for each: the rule ``Pacer.samples`` follows and ``/diagnostics`` reports."""
-    return ticks <= CATCH_UP_TICKS
+def each_sampled(ticks: int, real_time_factor: float = 1.0) -> bool:
+    """Whether a real-time wake-up that made ``ticks`` due publishes a sample for each: the
+    rule ``Pacer.samples`` follows and ``/diagnostics`` reports. Above factor 1 a wake-up
+    advances ceil(factor) ticks by design, with one sample."""
+    return ticks <= CATCH_UP_TICKS and real_time_factor <= 1.0
 
 
 @dataclass(frozen=True)
@@ -167,7 +168,7 @@ class Pacer:
         the sensors and the recording, and the run is the one an undelayed machine gives with
         the same commands. Above factor 1 (ceil(factor) ticks a wake-up by design), at max
         speed and after a longer stall, one sample for all."""
-        if ticks <= 1 or not each_sampled(ticks) or self.max_speed or self.real_time_factor > 1:
+        if ticks <= 1 or self.max_speed or not each_sampled(ticks, self.real_time_factor):
             return (ticks,) if ticks > 0 else ()
         return (1,) * ticks
 

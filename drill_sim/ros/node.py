@@ -40,7 +40,7 @@ from .commands import CommandInbox
 from .recorder import SessionRecorder
 from .stopping import init_stoppable
 from .topics import message_class, raw_sender, rclpy_qos, service_class
-from .wakeups import run_at_priority
+from .wakeups import CpuLatencyRequest, run_at_priority
 
 SWITCH_INTERVAL_S = 5e-4
 SERVE_PERIOD_S = 1e-3        # max speed: services, parameters, diagnostics served this often
@@ -255,6 +255,23 @@ class RigNode(Node):
             self.get_logger().warning(f"thread_priority {priority} not taken: {refused}; "
                                       "ticking under the default scheduler")
 
+    def request_cpu_latency(self) -> CpuLatencyRequest | None:
+        """``cpu_wakeup_latency_us`` >= 0: the request held open for the node's life (closed
+        at shutdown, or by the kernel if the process dies). Refused, the rig runs on and
+        says why."""
+        latency_us = int(self.p["cpu_wakeup_latency_us"])
+        if latency_us < 0:
+            return None
+        request = CpuLatencyRequest(latency_us)
+        if request.held:
+            self.get_logger().info(f"idle cores held to wake-ups of at most {latency_us} us "
+                                   "while the node runs (the whole machine's setting)")
+        else:
+            self.get_logger().warning(f"cpu_wakeup_latency_us {latency_us} not taken: "
+                                      f"{request.refused}; idle cores sleep as the machine "
+                                      "sets")
+        return request
+
     # ---- real time ---------------------------------------------------------------------
     def run_real_time(self, executor: EventsExecutor, stop) -> None:
         """A tick when the pacer says the next is due (``Pacer.next_tick_s``: at factor 1
@@ -459,7 +476,8 @@ class RigNode(Node):
             command_age_s=now - self._cmd_wall, command_timeout_s=self.p["command_timeout_s"],
             rate_hz=expected_hz, max_speed=self.pacer.max_speed,
             lockstep=None if self.lockstep is None else self.lockstep.status(now),
-            sim_time_s=self.sim_time_s, commands=CommandCounts(
+            sim_time_s=self.sim_time_s, real_time_factor=self.p["real_time_factor"],
+            commands=CommandCounts(
                 self.commands.received, self.superseded, self.commands.lost,
                 self.commands.lost - self._lost_before))
         self._lost_before = self.commands.lost
@@ -483,13 +501,14 @@ def main(args: list[str] | None = None) -> int:
     # The recorder's threads (chunk assembly, finishing a split file) run Python too; a tick
     # waiting for the GIL gets it within this switch interval, not Python's default 5 ms.
     sys.setswitchinterval(SWITCH_INTERVAL_S)
-    node = executor = None
+    node = executor = latency = None
     try:
         node = RigNode()
         executor = EventsExecutor()
         executor.add_node(node)
         node.rig.warm_up()   # load the compiled kernel before the first tick is due
         node.take_thread_priority()
+        latency = node.request_cpu_latency()
         # The loops serve the executor (EventsExecutor: a fifth of the CPU of the
         # SingleThreadedExecutor) with spin_once between their ticks.
         if node.lockstep is not None:
@@ -520,6 +539,8 @@ def main(args: list[str] | None = None) -> int:
                 executor.shutdown()
             node.commands.destroy()
             node.destroy_node()
+        if latency is not None:
+            latency.close()
         rclpy.try_shutdown()
     return 0
 

@@ -181,6 +181,13 @@ def specs(preset: Preset) -> list[Spec]:
              "CAP_SYS_NICE or an rtprio limit, else a warning); 0: the default scheduler",
              "", 0, 99, "0 (off) or a SCHED_FIFO priority 1-99",
              read_only="the loop's thread is set at start; " + START_ONLY),
+        Spec("cpu_wakeup_latency_us", -1, "while the node runs, no core of the machine may "
+             "sleep in an idle state slower than this to wake (Linux's CPU latency QoS, "
+             "/dev/cpu_dma_latency; 0: idle cores poll), so ticks and the controller's "
+             "wake-ups come on time; the whole machine's setting, at the price of idle "
+             "cores' power; needs root, else a warning; -1: the machine's own", "us", -1,
+             1_000_000, "-1 (off), or a limit of 0 to 1000000 us (1 s)",
+             read_only="the request is made at start; " + START_ONLY),
         Spec("qos_reliability", "reliable", "reliability of every rig topic",
              read_only="publishers and subscriptions are made with it; " + START_ONLY,
              choices=("reliable", "best_effort")),

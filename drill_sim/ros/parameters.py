@@ -84,14 +84,23 @@ def declare(node: Node) -> tuple[Preset, dict[str, Spec], dict[str, object]]:
     for spec in by_name.values():
         node.set_descriptor(spec.name, descriptor(spec),
                             Parameter(spec.name, value=values[spec.name]).get_parameter_value())
-    node.add_pre_set_parameters_callback(partial(_converted, by_name))
+    node.add_pre_set_parameters_callback(partial(_converted, node, by_name))
     return preset, by_name, values
 
 
-def _converted(by_name: dict[str, Spec], params: list[Parameter]) -> list[Parameter]:
-    """Integers for real parameters as reals, whole reals for integer ones as integers."""
+def _converted(node: Node, by_name: dict[str, Spec], params: list[Parameter]
+               ) -> list[Parameter]:
+    """Integers for real parameters as reals, whole reals for integer ones as integers. A
+    name the node never declared is refused by rclpy with a reason that does not name it
+    ("Invalid access to undeclared parameter(s): []"): the node's log says which, and the
+    nearest name it has."""
     out = []
     for param in params:
+        if not node.has_parameter(param.name):
+            near = difflib.get_close_matches(param.name, list(by_name), n=1, cutoff=0.6)
+            node.get_logger().warning(
+                f"set parameter '{param.name}' refused: {node.get_name()} has no such "
+                "parameter" + (f"; did you mean '{near[0]}'?" if near else ""))
         spec = by_name.get(param.name)
         if spec is not None and param.type_ in (Parameter.Type.INTEGER, Parameter.Type.DOUBLE):
             value, _ = spec.check(param.value)

@@ -80,6 +80,9 @@ def test_diagnostics_count_and_flag_stalled_real_time_ticks(steady):
                       period_max_s=3.2e-3, stalls=2, longest_stall_s=30e-3)
     assert rig_status(steady, QUIET, short, **RUNNING, max_speed=False).message.startswith(
         "2 ticks stalled in the last 1.0 s (longest 3.2 ms); their missed ticks published late")
+    fast = rig_status(steady, QUIET, short, **RUNNING, max_speed=False, real_time_factor=2.0)
+    assert "(longest 3.2 ms); the longest advanced its 6 ticks with one sample (above " \
+        "real-time factor 1" in fast.message                 # 3.2 periods at factor 2
     assert (status.values["overruns"], status.values["longest_stall_ms"]) == ("7", "30.000")
     calm = TickStats(ticks=1000, wall_s=1.0, sim_s=1.0, period_p99_s=1.1e-3, overruns=7,
                      period_max_s=1.2e-3, stalls=0, longest_stall_s=30e-3)

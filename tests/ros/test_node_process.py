@@ -13,7 +13,7 @@ import pytest
 import rclpy
 from geometry_msgs.msg import WrenchStamped
 from rosgraph_msgs.msg import Clock
-from rosutil import NodeProcess, spin_for, wait_for
+from rosutil import NodeProcess, set_double, spin_for, wait_for
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
 
@@ -73,6 +73,11 @@ def test_a_misspelled_parameter_is_named_with_the_nearest(ros, program):
         assert f"did you mean '{meant}'?" in line and "[WARN]" in line
         assert proc.proc.poll() is None                  # a warning, not a refusal
         assert _line_with(proc, "qos_overrides", timeout_s=1.0) is None
+        if program == "drill_sim_node":    # at run time: refused by rclpy, named in the log
+            result = set_double(ros, "/typo/drill_sim", "raet_hz", 500.0)
+            assert not result.successful
+            line = _line_with(proc, "refused: drill_sim has no such parameter")
+            assert line is not None and "'raet_hz'" in line and "'rate_hz'?" in line, line
 
 
 def test_sim_time_mode_publishes_clock_ten_times_faster(ros):
@@ -204,6 +209,36 @@ def _policy(stat: str) -> tuple[int, int]:
     """(scheduling policy, real-time priority) from a /proc .../stat line."""
     fields = stat.rsplit(")", 1)[1].split()
     return int(fields[38]), int(fields[37])          # fields 41 and 40 of proc(5)
+
+
+def test_cpu_wakeup_latency_is_requested_while_the_node_runs_and_withdrawn_after(ros):
+    """cpu_wakeup_latency_us:=7: while the installed node runs it holds the kernel's CPU
+    latency request open with 7 us (the limit in force is then at most 7), and once it has
+    stopped the machine's limit is what it was; or, where the system refuses (not root), a
+    warning saying what would allow it."""
+    import os
+    from pathlib import Path
+
+    from drill_sim.ros.wakeups import CPU_LATENCY_DEVICE, cpu_latency_now_us
+    before = cpu_latency_now_us()
+    seen: list[int] = []
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/qos_latency",
+                     "-p", "cpu_wakeup_latency_us:=7") as rig:
+        sub = ros.create_subscription(JointState, "/qos_latency/drill_sim/joint_states",
+                                      lambda m: seen.append(1), 10)
+        wait_for(lambda: len(seen) > 20, ros, 30.0, "the rig's samples")
+        fds = Path(f"/proc/{rig.proc.pid}/fd")
+        held = [fd for fd in fds.iterdir() if os.path.realpath(fd) == CPU_LATENCY_DEVICE]
+        during = cpu_latency_now_us()
+        code, out = rig.stop()
+        ros.destroy_subscription(sub)
+    assert code == 0, out
+    if before is None:                               # not root: refused, and said why
+        assert "cpu_wakeup_latency_us 7 not taken" in out and not held, out
+        return
+    assert "wake-ups of at most 7 us" in out and len(held) == 1, out
+    assert during <= 7                               # the least of all requests
+    assert cpu_latency_now_us() == before            # withdrawn with the node
 
 
 @pytest.mark.parametrize("mode", ["real_time", "max_speed"])
