@@ -186,7 +186,7 @@ def specs(preset: Preset) -> list[Spec]:
              "/dev/cpu_dma_latency; 0: idle cores poll), so ticks and the controller's "
              "wake-ups come on time; the whole machine's setting, at the price of idle "
              "cores' power; needs root, else a warning; -1: the machine's own", "us", -1,
-             1_000_000, "-1 (off), or a limit of 0 to 1000000 us (1 s)",
+             1_000_000, "-1: off; 0: idle cores poll",
              read_only="the request is made at start; " + START_ONLY),
         Spec("qos_reliability", "reliable", "reliability of every rig topic",
              read_only="publishers and subscriptions are made with it; " + START_ONLY,
