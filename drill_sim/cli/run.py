@@ -31,6 +31,8 @@ STATUS_WINDOW_S = 1.0          # the stretch of samples the status line names th
 COMPARE_WINDOW_S = 10.0        # before/after a controller is switched on: the last ... of each
 
 MAX_DURATION_S = 1e6     # --duration [s] (documented in msg_docs/cli.md, "Limits")
+DISCOVERY_S = 0.5        # before the rig starts: how long to look for a rig already running
+OTHER_RIG_LOOK_S = 0.5   # during the session: how often to look for a second rig
 
 
 def executable(name: str) -> str:
@@ -67,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
 
     from ..ros.monitor import Monitor
     from ..ros.stopping import stop_processes
+    from ..ros.topics import NOT_YET_NAMED
 
     if args.no_record and args.record is not None:
         raise UsageError(f"--no-record with --record {args.record}: they contradict each other; "
@@ -99,21 +102,33 @@ def run(args: argparse.Namespace) -> int:
     monitor = Monitor()
     executor = SingleThreadedExecutor()
     executor.add_node(monitor)
-    procs = [subprocess.Popen(node_cmd, env=env)]
+    # a rig of this name already on the domain would mix with this session's: look before
+    # starting one (discovery of a local rig mostly takes ~0.05 s), and all along the session
+    # (it may take ~3 s)
+    end = time.monotonic() + DISCOVERY_S
+    while time.monotonic() < end and not monitor.other_rigs(first_included=True):
+        executor.spin_once(timeout_sec=0.02)
+    end = time.monotonic() + DISCOVERY_S          # found: its name may come a moment later
+    while NOT_YET_NAMED in monitor.other_rigs(first_included=True) and time.monotonic() < end:
+        executor.spin_once(timeout_sec=0.02)
+    others = monitor.other_rigs(first_included=True)
+    procs = [] if others else [subprocess.Popen(node_cmd, env=env)]
     tty = sys.stdout.isatty()
     node_exit = None
     try:
         # the driver starts once the rig publishes: a node that refuses its parameters has
         # printed its one line and run ends there, with the node's status 2
-        while monitor.count == 0 and node_exit is None:
+        while not others and monitor.count == 0 and node_exit is None:
             executor.spin_once(timeout_sec=0.05)
             node_exit = procs[0].poll()
-        if node_exit is None:
+        if not others and node_exit is None:
             procs += [subprocess.Popen(cmd, env=env) for cmd in procs_before]
             procs.append(subprocess.Popen(drive_cmd, env=env))
             node_exit = _live(executor, monitor, procs[0], duration, tty)
     except KeyboardInterrupt:
         pass
+    except OtherRig as exc:
+        others = exc.args[0]
     finally:
         if tty:
             print()
@@ -125,6 +140,12 @@ def run(args: argparse.Namespace) -> int:
         executor.shutdown()
         monitor.destroy_node()
         rclpy.try_shutdown()
+    if others:
+        print(f"drill_sim run: another rig publishes on {monitor.topic} ({', '.join(others)}): "
+              "the session would mix both rigs' samples and send the driller's commands to "
+              "both, so it stopped; stop that rig, or run this session on another "
+              "ROS_DOMAIN_ID (ROS_DOMAIN_ID=7 drill_sim run)", file=sys.stderr)
+        return 1
     if node_exit == 2 and received.time_s.size == 0:
         return 2                   # a bad start-up parameter: the node said which, in one line
     if node_exit is not None:
@@ -197,16 +218,25 @@ def _before_after(series: RigSeries, law: str, on_s: float) -> str:
     return f"{before['ssi']:.2f} → {after['ssi']:.2f}"
 
 
+class OtherRig(Exception):
+    """Another rig publishes on the session rig's topics (names: fully qualified nodes)."""
+
+
 def _live(executor, monitor, node: subprocess.Popen, duration: float, tty: bool) -> int | None:
     """Spin the monitor for ``duration`` (+2 s) with the status line; the node's exit status
-    if it stopped meanwhile."""
+    if it stopped meanwhile. Raises OtherRig when a second rig appears on the session's
+    topics (discovery of one already running may take ~3 s)."""
     start = time.monotonic()
-    last_print = 0.0
+    last_print = last_look = 0.0
     while time.monotonic() - start < duration + 2.0:
         executor.spin_once(timeout_sec=0.02)
         if node.poll() is not None:
             return node.returncode
         now = time.monotonic()
+        if now - last_look > OTHER_RIG_LOOK_S:
+            last_look = now
+            if others := monitor.other_rigs():
+                raise OtherRig(others)
         if now - last_print > (0.2 if tty else 5.0):
             last_print = now
             s = monitor.latest()

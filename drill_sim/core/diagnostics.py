@@ -65,12 +65,22 @@ class Status:
     values: dict[str, str]     # key -> value, units in the keys
 
 
+def other_publishers_words(others: tuple[str, ...]) -> str:
+    """What two publishers of one rig's samples mean, and what to do (log and /diagnostics)."""
+    return (f"{len(others)} other publisher{'s' if len(others) > 1 else ''} on this rig's "
+            f"~/joint_states ({', '.join(others)}): another rig of the same name or a replay "
+            "onto its topics, so every subscriber gets both rigs' samples and commands reach "
+            "both; stop it, or run this rig in its own namespace (-r __ns:=/rig2) or on "
+            "another ROS_DOMAIN_ID")
+
+
 def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *,
                paused: bool, record_error: str | None, command_age_s: float,
                command_timeout_s: float, rate_hz: float, max_speed: bool,
                sim_time_s: float, commands: CommandCounts = CommandCounts(),
                lockstep: LockstepStatus | None = None,
-               real_time_factor: float = 1.0) -> Status:
+               real_time_factor: float = 1.0,
+               other_publishers: tuple[str, ...] = ()) -> Status:
     """The status over one diagnostics window. Conditions: ERROR when recording failed;
     WARN, while running, when ticks overran in real-time mode and fewer than SLOW_TICKS of
     ``rate_hz`` [Hz] (the timer ticks expected to publish) came, when real-time ticks
@@ -79,7 +89,9 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
     ``paused`` (OK) while paused. ``metrics``: the rig's window metrics (``ssi``,
     ``stick_fraction``, ``bounce_fraction``); ``sim_time_s``: session time [s];
     ``real_time_factor``: the one asked (a stall's ticks are published each at factors up
-    to 1, ``pacing.each_sampled``)."""
+    to 1, ``pacing.each_sampled``); ``other_publishers``: the nodes other than this rig that
+    publish on its samples' topic (another rig of the same name, a replay onto it), a WARN
+    whether running or paused, since every subscriber then sees both."""
     name = drilling_regime(ssi=metrics["ssi"],
                            stuck=metrics["stick_fraction"] > 0.0 or sample.stick_slip,
                            off_bottom_fraction=metrics["bounce_fraction"],
@@ -88,6 +100,8 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
     found: list[tuple[int, str]] = []
     if record_error:
         found.append((ERROR, record_error))
+    if other_publishers:
+        found.append((WARN, other_publishers_words(other_publishers)))
     if paused:
         found.append((OK, "paused"))
     else:

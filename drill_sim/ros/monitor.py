@@ -11,7 +11,7 @@ from std_msgs.msg import Bool
 from ..bag.series import JOINT_FIELDS, RigSeries
 from ..wire import rig_topics
 from ..wire.qos import RELIABLE
-from .topics import rclpy_qos
+from .topics import publisher_names, rclpy_qos
 
 
 class Monitor(Node):
@@ -27,6 +27,19 @@ class Monitor(Node):
         self._rows = np.zeros((1 << 16, 14))
         self.count = 0
         self.flag = False
+
+    def other_rigs(self, first_included: bool = False) -> list[str]:
+        """The publishers on the rig's ``~/joint_states`` beyond the session's own rig (fully
+        qualified node names): another rig of the same name on this domain, or a replay onto
+        it; ``first_included``: all of them (before the session's rig has started)."""
+        names = sorted(publisher_names(self.get_publishers_info_by_topic(self.topic)))
+        rig = self.topic.rsplit("/", 1)[0]               # the rig this session started
+        if first_included:
+            return names
+        if rig in names:
+            names.remove(rig)
+            return names
+        return names[1:]
 
     def _on_flag(self, msg: Bool) -> None:
         self.flag = msg.data

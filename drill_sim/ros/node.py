@@ -26,7 +26,7 @@ from rclpy.serialization import serialize_message
 from std_srvs.srv import SetBool, Trigger
 
 from ..core import NoSteadyDrilling, ParameterError, session
-from ..core.diagnostics import CommandCounts, rig_status
+from ..core.diagnostics import CommandCounts, other_publishers_words, rig_status
 from ..core.lockstep import Lockstep
 from ..core.pacing import Pacer
 from ..core.rig import RigSample
@@ -39,7 +39,14 @@ from . import parameters
 from .commands import CommandInbox
 from .recorder import SessionRecorder
 from .stopping import init_stoppable
-from .topics import message_class, raw_sender, rclpy_qos, service_class
+from .topics import (
+    NOT_YET_NAMED,
+    message_class,
+    publisher_names,
+    raw_sender,
+    rclpy_qos,
+    service_class,
+)
 from .wakeups import CpuLatencyRequest, run_at_priority
 
 SWITCH_INTERVAL_S = 5e-4
@@ -83,6 +90,8 @@ class RigNode(Node):
         self._on_sample = self.p["measured_publish"] == "on_sample"
         self._next_live_refresh = 0.0
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
+        self._samples_topic = self.resolve_topic_name(rig_topics.JOINT_STATES.name)
+        self._others: tuple[str, ...] = ()       # other publishers on it, last looked at
         self.commands = CommandInbox(self, self.p["qos_reliability"])
         self.superseded = 0                      # commands replaced within their tick
         self._mode_left: tuple[str, float] | None = None    # top-drive mode left, wall time
@@ -462,6 +471,25 @@ class RigNode(Node):
         return SetParametersResult(successful=True)
 
     # ---- diagnostics -------------------------------------------------------------------
+    def other_publishers(self) -> tuple[str, ...]:
+        """The nodes besides this one that publish on its ``~/joint_states`` (fully qualified
+        names; this rig's own name again when a second rig of the same name runs), said in
+        the log when they come and go."""
+        # an endpoint whose node is not named yet is looked at again next time
+        names = sorted(n for n in publisher_names(
+            self.get_publishers_info_by_topic(self._samples_topic)) if n != NOT_YET_NAMED)
+        if self.get_fully_qualified_name() in names:
+            names.remove(self.get_fully_qualified_name())
+        others = tuple(names)
+        if others != self._others:
+            if others:
+                self.get_logger().error(other_publishers_words(others))
+            else:
+                self.get_logger().info(f"{self._samples_topic}: this rig is its only "
+                                       "publisher again")
+            self._others = others
+        return others
+
     def publish_diagnostics(self) -> None:
         """The status of ``core.diagnostics.rig_status`` as a DiagnosticArray."""
         now = time.monotonic()
@@ -477,6 +505,7 @@ class RigNode(Node):
             rate_hz=expected_hz, max_speed=self.pacer.max_speed,
             lockstep=None if self.lockstep is None else self.lockstep.status(now),
             sim_time_s=self.sim_time_s, real_time_factor=self.p["real_time_factor"],
+            other_publishers=self.other_publishers(),
             commands=CommandCounts(
                 self.commands.received, self.superseded, self.commands.lost,
                 self.commands.lost - self._lost_before))

@@ -87,3 +87,13 @@ def subscription_qos(publishers: list[TopicEndpointInfo], depth: int) -> QoSProf
     """A subscription that matches every publisher, as rosbag2's recorder adapts it: reliable
     only if all publishers are, transient-local only if all are."""
     return profile_from_dicts([profile_dict(p.qos_profile) for p in publishers], depth)
+
+
+NOT_YET_NAMED = "(a node not yet named)"
+
+
+def publisher_names(infos) -> list[str]:
+    """Fully qualified node names of ``get_publishers_info_by_topic`` entries; an endpoint
+    discovered before its node's name is NOT_YET_NAMED."""
+    return [NOT_YET_NAMED if i.node_name == "_NODE_NAME_UNKNOWN_"
+            else f"{i.node_namespace.rstrip('/')}/{i.node_name}" for i in infos]

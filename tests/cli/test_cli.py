@@ -134,6 +134,34 @@ def test_main_job_bad_arguments(tmp_path):
     assert list((tmp_path / "taken").iterdir()) == []          # nothing written into it
 
 
+def test_main_job_refuses_to_mix_with_a_rig_already_running(tmp_path):
+    """A rig of the same name already on the domain: the session would mix both rigs'
+    samples and drive both, so run stops, naming it, and starts no driver."""
+    from rosutil import NodeProcess, isolate
+    isolate()
+    with NodeProcess("drill_sim_node") as other:
+        assert other.proc.stdout.readline()                # it is up
+        proc = subprocess.run([installed("drill_sim"), "run", "--duration", "5", "--no-record"],
+                              capture_output=True, text=True, timeout=120, cwd=tmp_path)
+        assert other.proc.poll() is None                    # left alone
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert "another rig publishes on /drill_sim/joint_states (/drill_sim)" in \
+        proc.stderr and "Traceback" not in proc.stderr + proc.stdout
+    assert "rpm" not in proc.stdout                        # no session, no status line
+    # one that comes during the session stops it too
+    session = subprocess.Popen([installed("drill_sim"), "run", "--duration", "60",
+                                "--no-record"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    try:
+        assert "rpm" in session.stdout.readline()          # the first status line
+        with NodeProcess("drill_sim_node"):
+            code = session.wait(timeout=60)
+    finally:
+        session.kill()
+    err = session.stderr.read()
+    assert code == 1 and "another rig publishes on /drill_sim/joint_states (/drill_sim)" in err
+
+
 @pytest.mark.parametrize("param, fragment", [
     ("initial_state:=sideways", "initial_state = 'sideways'"),
     ("record_split_size_bytes:=1", "1 MiB at least"),

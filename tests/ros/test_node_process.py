@@ -211,6 +211,27 @@ def _policy(stat: str) -> tuple[int, int]:
     return int(fields[38]), int(fields[37])          # fields 41 and 40 of proc(5)
 
 
+def test_a_second_rig_of_the_same_name_is_named_by_both(ros):
+    """Two rigs started under one name on one domain publish on the same topics, and every
+    subscriber mixes their samples: each says so (log and /diagnostics), naming the other,
+    and the first says when it is the only one again."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    warned: list[str] = []
+    sub = ros.create_subscription(DiagnosticArray, "/diagnostics", lambda m: warned.extend(
+        s.message for s in m.status if s.name == "drill_sim: rig" and "other publisher"
+        in s.message), 10)
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/dup") as first:
+        assert _line_with(first, "ready") is not None
+        with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/dup") as second:
+            for rig in (first, second):
+                line = _line_with(rig, "other publisher on this rig's ~/joint_states")
+                assert line is not None and "(/dup/drill_sim)" in line and "[ERROR]" in line
+            wait_for(lambda: bool(warned), ros, 10.0, "the warning on /diagnostics")
+            assert "another rig of the same name or a replay" in warned[0]
+        assert _line_with(first, "this rig is its only publisher again") is not None
+    ros.destroy_subscription(sub)
+
+
 def test_cpu_wakeup_latency_is_requested_while_the_node_runs_and_withdrawn_after(ros):
     """cpu_wakeup_latency_us:=7: while the installed node runs it holds the kernel's CPU
     latency request open with 7 us (the limit in force is then at most 7), and once it has
