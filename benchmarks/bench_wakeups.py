@@ -3,7 +3,8 @@
 A process that does nothing but sleep until the next 1 ms of an absolute grid (as the rig
 node's real-time loop does: 1 us of timer slack, no work) for --seconds, and how late it woke:
 the share of wake-ups more than half a period late (the node's rounding would advance two
-ticks there), the p99 of the period between wake-ups, the latest wake-up. A rig node cannot
+ticks there), the p99 of the period between wake-ups, the latest wake-up, the share more than
+50 us late and the median lateness (what waking a sleeping core costs). A rig node cannot
 hold its targets (>= 99.5 % of ticks on time, p99 period <= 1.2 ms) on a machine whose floor
 misses them: compare `bench_node.py` with this, run beside it (it prints this first).
 
@@ -38,11 +39,15 @@ class Floor:
     late_half_period: float       # share of wake-ups more than half a period late
     period_p99_ms: float
     latest_ms: float              # the latest wake-up, after its deadline [ms]
+    late_50us: float = 0.0        # share of wake-ups more than 50 us late
+    late_median_us: float = 0.0   # the median wake-up's lateness [us]
 
     def line(self, seconds: float, how: str = "") -> str:
         return (f"this machine's floor{how}, a do-nothing 1 kHz sleeper for {seconds:g} s: "
                 f"{100 * (1 - self.late_half_period):.2f} % of wake-ups within half a period, "
-                f"period p99 {self.period_p99_ms:.3f} ms, latest {self.latest_ms:.2f} ms late")
+                f"period p99 {self.period_p99_ms:.3f} ms, latest {self.latest_ms:.2f} ms late; "
+                f"{100 * self.late_50us:.1f} % more than 50 us late, median "
+                f"{self.late_median_us:.0f} us late")
 
 
 def floor(seconds: float, fifo: int = 0) -> Floor:
@@ -66,7 +71,8 @@ def floor(seconds: float, fifo: int = 0) -> Floor:
             os.sched_setscheduler(0, *before)
     late = woke - (start + np.arange(n) * PERIOD_S)
     return Floor(n, float(np.mean(late > PERIOD_S / 2)),
-                 float(np.percentile(np.diff(woke), 99) * 1e3), float(late.max() * 1e3))
+                 float(np.percentile(np.diff(woke), 99) * 1e3), float(late.max() * 1e3),
+                 float(np.mean(late > 50e-6)), float(np.median(late) * 1e6))
 
 
 def main() -> None:

@@ -61,8 +61,8 @@ class CpuLatencyRequest:
     """A request to the kernel's CPU latency QoS (``/dev/cpu_dma_latency``): no core may sleep
     in an idle state whose exit takes longer than the latency asked, for as long as the
     request is open; 0: idle cores poll. A waking thread then finds its core awake: on a
-    2-core virtual machine the share of 1 kHz wake-ups more than 0.05 ms late went from 72-91 %
-    to 3 % (``benchmarks/bench_wakeups.py``). It is the kernel's interface for this (the one
+    2-core virtual machine the share of 1 kHz wake-ups more than 50 us late went from 58-74 %
+    to 1.4-4.2 % (``benchmarks/bench_wakeups.py``). It is the kernel's interface for this (the one
     ``cyclictest`` holds) and it applies to the whole machine (idle cores then cost power),
     so the node takes it only when asked. The kernel drops the request when the file closes,
     also when the process dies: nothing stays behind on the machine."""
