@@ -408,7 +408,7 @@ class ControllerNode(Node):
 
 
 def main(args: list[str] | None = None) -> int:
-    stop = init_stoppable(args)
+    stop = init_stoppable(args, ros_args_only=True)
     node = executor = None
     try:
         node = ControllerNode()

@@ -526,7 +526,7 @@ class RigNode(Node):
 def main(args: list[str] | None = None) -> int:
     # SIGINT/SIGTERM only raise a flag, so the node always stops between two ticks: no tick
     # is cut in half (published but not recorded, or recorded in part).
-    stop = init_stoppable(args)
+    stop = init_stoppable(args, ros_args_only=True)
     # The recorder's threads (chunk assembly, finishing a split file) run Python too; a tick
     # waiting for the GIL gets it within this switch interval, not Python's default 5 ms.
     sys.setswitchinterval(SWITCH_INTERVAL_S)

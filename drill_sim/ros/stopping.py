@@ -16,15 +16,18 @@ import sys
 from pathlib import Path
 
 import rclpy
+import rclpy.utilities
 from rclpy._rclpy_pybind11 import RCLError
 from rclpy.signals import SignalHandlerOptions
 
 from .wakeups import tighten_timer_slack
 
 
-def init_stoppable(args: list[str] | None) -> list[int]:
+def init_stoppable(args: list[str] | None, ros_args_only: bool = False) -> list[int]:
     """``rclpy.init`` without its signal handlers; the returned list gets the number of each
-    SIGINT or SIGTERM received (empty: keep going)."""
+    SIGINT or SIGTERM received (empty: keep going). ``ros_args_only``: a program configured by
+    ROS parameters alone refuses arguments outside ``--ros-args``, which ROS would ignore
+    without a word (``drill_sim_node -p rate_hz:=100`` ran at 1000 Hz)."""
     tighten_timer_slack()
     name = Path(sys.argv[0]).name
     argv = sys.argv if args is None else args
@@ -41,6 +44,12 @@ def init_stoppable(args: list[str] | None) -> list[int]:
         print(f"{name}: cannot start ROS: {why}; expected valid --ros-args (a --params-file "
               "that exists and parses, name:=value remappings)", file=sys.stderr)
         raise SystemExit(2) from None
+    if ros_args_only and (stray := rclpy.utilities.remove_ros_args(argv)[1:]):
+        rclpy.try_shutdown()
+        print(f"{name}: arguments outside --ros-args are not read: {' '.join(stray)}; "
+              f"expected them after --ros-args ({name} --ros-args -p name:=value)",
+              file=sys.stderr)
+        raise SystemExit(2)
     stop: list[int] = []
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda signum, frame: stop.append(signum))

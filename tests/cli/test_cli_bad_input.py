@@ -85,6 +85,11 @@ CASES = [
      ["--w0 1e308", "expected"]),
     ("drill_sim", ["stability", "--re-min", "-50"], ["--re-min -50", "roots", "expected"]),
     ("drill_sim", ["stability", "--rpm", "0"], ["--rpm 0", "expected"]),
+    # parameters given outside --ros-args, which ROS would ignore
+    ("drill_sim_node", ["-p", "rate_hz:=100"], ["outside --ros-args are not read: -p rate_hz:=100",
+                                                "expected them after --ros-args"]),
+    ("drill_sim_controller", ["enabled", "--ros-args", "-p", "law:=z_torque"],
+     ["not read: enabled"]),
     # recorder and player options
     ("drill_sim_replay", ["{bag}", "--rate", "1e-300", "--wait-for", "0"],
      ["--rate 1e-300", "expected a playback speed"]),
