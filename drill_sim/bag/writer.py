@@ -187,7 +187,11 @@ class BagWriter:
         information = self._information(extra=f)["rosbag2_bagfile_information"]
         self.files.append(self._file_entry(f))
         self._file = None
-        self._open_file()                  # first: the closing thread competes for the GIL
+        try:
+            self._open_file()              # first: the closing thread competes for the GIL
+        except BagError:                   # no next file: this one still gets its summary
+            self._finish_closed(f, information)
+            raise
         self._closing = self._closer.submit(self._finish_closed, f, information)
         return self._file
 

@@ -37,7 +37,7 @@ from ..wire.rig_messages import RigEncoders
 from ..wire.rig_topics import RigTopic
 from . import parameters
 from .commands import CommandInbox
-from .recorder import SessionRecorder
+from .recorder import RecordRefused, SessionRecorder
 from .stopping import init_stoppable
 from .topics import (
     NOT_YET_NAMED,
@@ -107,11 +107,17 @@ class RigNode(Node):
         self.lockstep = Lockstep(tuple("~/" + n for n in self.p["lockstep_topics"]),
                                  self.p["lockstep_timeout_s"]) if self.p["lockstep"] else None
         self._epoch_ns = time.time_ns()          # stamps = epoch + sim time without /clock
-        self.recorder = SessionRecorder(
-            p=self.p, rig=self.rig, preset=self.preset.name,
-            node=self.get_fully_qualified_name(), resolve=self.resolve_topic_name,
-            stamp_epoch_ns=0 if self.with_clock else self._epoch_ns,
-            logger=self.get_logger(), sensors=self.sensors.profile) if self.p["record"] else None
+        try:
+            self.recorder = SessionRecorder(
+                p=self.p, rig=self.rig, preset=self.preset.name,
+                node=self.get_fully_qualified_name(), resolve=self.resolve_topic_name,
+                stamp_epoch_ns=0 if self.with_clock else self._epoch_ns, logger=self.get_logger(),
+                sensors=self.sensors.profile) if self.p["record"] else None
+        except RecordRefused as exc:
+            hint = "" if "expected" in str(exc) or "choose" in str(exc) else (
+                "; expected a new bag directory in an existing folder")
+            raise SystemExit(f"drill_sim_node: parameter record = {self.p['record']!r}: "
+                             f"{exc}{hint} (nothing was run)") from None
         self.pacer = Pacer(self.p["rate_hz"], self.p["real_time_factor"],
                            self._back_to_back(self.p), self.p["diagnostics_period_s"],
                            self.rig.time_s)

@@ -6,8 +6,9 @@ the topics table.
 Outputs are recorded as the very bytes the node published, commands as the very bytes it
 received; events are encoded here (``drill_sim.wire.cdr``).
 
-Recording problems (full disk, unwritable path) stop the recording with a clear error and leave
-the simulation running; the bag written so far stays readable.
+A bag that cannot be opened refuses the start (``RecordRefused``); a recording problem later
+(full disk, a split file that cannot be created) stops the recording with a clear error and
+leaves the simulation running; the bag written so far stays readable.
 """
 
 from __future__ import annotations
@@ -25,6 +26,10 @@ from ..core.sensor_profile import SensorProfile
 from ..core.session import geometry_record, key_figures
 from ..wire import WireError, cdr, rig_topics
 from ..wire.rig_topics import RigTopic
+
+
+class RecordRefused(Exception):
+    """The bag of ``record`` cannot be opened (it exists, its folder does not, no room...)."""
 
 
 class SessionRecorder:
@@ -66,9 +71,9 @@ class SessionRecorder:
                 qos = t.qos if t is rig_topics.DIAGNOSTICS_TOPIC else offered
                 self.writer.add_topic(self.names[t.name], t.type_name, [qos.as_dict()])
         except (OSError, BagError) as exc:
-            self.error = f"not recording: {exc}"
-            logger.error(f"{self.error}; the simulation runs on")
-            return
+            # at start nothing has run yet: the node refuses to start (a session asked to
+            # be recorded and not recorded would be lost); a failure later leaves it running
+            raise RecordRefused(str(exc)) from None
         logger.info(f"recording to {p['record']}")
 
     def set_split(self, duration_s: float, size_bytes: int) -> None:

@@ -107,21 +107,54 @@ def test_sigkill_loses_at_most_the_last_second_and_repair_recovers(ros, tmp_path
         assert r.message_count == found.message_count
 
 
-def test_unwritable_record_path_keeps_the_simulation_running(ros, tmp_path):
-    blocker = tmp_path / "a_file"
-    blocker.write_text("not a directory")
+@pytest.mark.parametrize("where, fragment", [
+    ("a_file/bag", "Not a directory; expected a new bag directory in an existing folder"),
+    ("taken", "already exists; choose a new directory"),
+    ("no/such/bag", "does not exist"),
+])
+def test_a_record_path_it_cannot_use_stops_the_node_before_it_runs(tmp_path, where, fragment):
+    """A session asked to be recorded and not recorded would be lost: the node refuses at
+    start, in one line (as drill_sim run --record and drill_sim_record -o do), and writes
+    nothing."""
+    (tmp_path / "a_file").write_text("not a directory")
+    (tmp_path / "taken").mkdir()
+    before = sorted(tmp_path.rglob("*"))
+    proc = NodeProcess("drill_sim_node", "--ros-args", "-p", f"record:={tmp_path / where}")
+    code, out = proc.proc.wait(timeout=60), proc.proc.stdout.read()
+    lines = out.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "Traceback" not in out, out
+    assert f"parameter record = '{tmp_path / where}'" in lines[0] and fragment in lines[0]
+    assert "(nothing was run)" in lines[0]
+    assert sorted(tmp_path.rglob("*")) == before
+
+
+def test_a_recording_that_fails_later_stops_and_leaves_the_simulation_running(ros, tmp_path):
+    """Writing fails mid-session (the next split file cannot be created: the bag's folder was
+    replaced by a file): an ERROR on /diagnostics says so, the outputs go on, the node ends
+    normally, and what was written before stays readable."""
+    bag, moved = tmp_path / "bag", tmp_path / "moved"
     statuses: list[DiagnosticStatus] = []
-    ros.create_subscription(DiagnosticArray, "/diagnostics", lambda m: statuses.extend(
-        s for s in m.status if s.name.startswith("unwritable")), 10)
-    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/nowrite", "-r",
-                     "__node:=unwritable", "-p", f"record:={blocker}/bag"):
-        seen: list[bool] = []
-        ros.create_subscription(Bool, "/nowrite/unwritable/bit/stick_slip", seen.append, 100)
-        wait_for(lambda: len(seen) > 50, ros, 30.0, "outputs despite the bad record path")
-        wait_for(lambda: any(s.level == DiagnosticStatus.ERROR for s in statuses), ros, 10.0,
+    sub = ros.create_subscription(DiagnosticArray, "/diagnostics", lambda m: statuses.extend(
+        s for s in m.status if s.name.startswith("failing")), 10)
+    seen: list[bool] = []
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/failing", "-r",
+                     "__node:=failing", "-p", f"record:={bag}",
+                     "-p", "record_split_duration_s:=1.0") as rig:
+        flag = ros.create_subscription(Bool, "/failing/failing/bit/stick_slip", seen.append, 100)
+        wait_for(lambda: len(seen) > 50, ros, 30.0, "the rig's outputs")
+        bag.rename(moved)
+        bag.write_text("not a directory any more")
+        wait_for(lambda: any(s.level == DiagnosticStatus.ERROR for s in statuses), ros, 15.0,
                  "an ERROR status about recording")
+        n = len(seen)
+        wait_for(lambda: len(seen) > n + 50, ros, 10.0, "outputs after the failure")
+        code, out = rig.stop()
+    ros.destroy_subscription(sub)
+    ros.destroy_subscription(flag)
     error = next(s for s in statuses if s.level == DiagnosticStatus.ERROR)
-    assert "not recording" in error.message and "a_file" in error.message
+    assert code == 0 and "recording stopped" in error.message, (error.message, out)
+    found = reader.info(moved)          # the files written before the failure, intact
+    assert found.message_count > 1000 and not found.problems, found.problems
 
 
 def test_recording_splits_by_duration(ros, tmp_path):
