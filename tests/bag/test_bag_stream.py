@@ -61,6 +61,8 @@ def test_metrics_last_seconds(tmp_path, capsys):
     assert main(["bag", "metrics", str(bag), "--last", "1", "--start", "0"]) == 2
     assert main(["bag", "metrics", str(bag), "--last", "0"]) == 2
     capsys.readouterr()
+    assert main(["bag", "metrics", str(bag), "--start", "2", "--end", "1"]) == 2
+    assert "the window ends before it starts" in capsys.readouterr().err
     # a window past the end says where the samples are; a wrong topic, which there are
     assert main(["bag", "metrics", str(bag), "--start", "100"]) != 0
     assert "its samples span 0 to 2.999 s after the first" in capsys.readouterr().err

@@ -38,6 +38,9 @@ def check(args: argparse.Namespace, out: Path | None = None) -> None:
         value = getattr(args, name)
         if value is not None and not (math.isfinite(value) and value >= 0):
             raise UsageError(f"--{name} = {value}: expected a time >= 0 s")
+    if args.start is not None and args.end is not None and args.end <= args.start:
+        raise UsageError(f"--start {args.start:g} --end {args.end:g}: the window ends before "
+                         "it starts; expected --end after --start")
     if args.last is not None:
         if not (math.isfinite(args.last) and args.last > 0):
             raise UsageError(f"--last = {args.last}: expected a time > 0 s")
