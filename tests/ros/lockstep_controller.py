@@ -110,9 +110,18 @@ def main() -> int:
             executor.spin_once(timeout_sec=timeout_s)
         return not stop
 
+    def connected() -> bool:
+        if node.pub.get_subscription_count() > 0 and node.sub.get_publisher_count() > 0:
+            return True
+        if not said and time.monotonic() > waiting_since + 5.0:     # a wrong --rig, say
+            said.append(True)
+            print(f"waiting for the rig {args.rig} (nothing publishes {node.sub.topic_name} "
+                  "yet; is --rig the rig node's full name?)", flush=True)
+        return False
+
+    waiting_since, said = time.monotonic(), []
     try:
-        if not spin_until(lambda: node.pub.get_subscription_count() > 0
-                          and node.sub.get_publisher_count() > 0):
+        if not spin_until(connected):
             return 0
         if args.resume:
             client = node.create_client(SetBool, f"{args.rig}/pause")
