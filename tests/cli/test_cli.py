@@ -141,7 +141,7 @@ def test_main_job_refuses_to_mix_with_a_rig_already_running(tmp_path):
     isolate()
     with NodeProcess("drill_sim_node") as other:
         assert other.proc.stdout.readline()                # it is up
-        proc = subprocess.run([installed("drill_sim"), "run", "--duration", "5", "--no-record"],
+        proc = subprocess.run([installed("drill_sim"), "run", "--duration", "30", "--no-record"],
                               capture_output=True, text=True, timeout=120, cwd=tmp_path)
         assert other.proc.poll() is None                    # left alone
     assert proc.returncode == 1, proc.stdout + proc.stderr
