@@ -76,7 +76,8 @@ class BagWriter:
                            f"{self.path.absolute().parent} does not exist; expected a new name "
                            "in an existing folder") from None
         except OSError as exc:
-            raise BagError(f"bag {self.path}: cannot create it: {exc.strerror}") from None
+            raise BagError(f"bag {self.path}: cannot create it: {exc.strerror}; expected a new "
+                           "bag directory in an existing folder") from None
         self.split_duration_ns = int(split_duration_s * 1e9)
         self.split_size_bytes = int(split_size_bytes)
         self.flush_interval_s = flush_interval_s

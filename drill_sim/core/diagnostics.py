@@ -128,13 +128,12 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
         if commands.lost_in_window:
             found.append((WARN, f"{commands.lost_in_window} commands lost in the last "
                                 f"{ticks.wall_s:.1f} s (they came faster than the ticks)"))
-        if command_age_s > command_timeout_s and commands.received == 0:
-            found.append((WARN, f"no command received yet ({command_age_s:.1f} s since "
-                                f"start, timeout {command_timeout_s:g} s); holding the "
-                                "initial commands"))
-        elif command_age_s > command_timeout_s:
+        if command_age_s > command_timeout_s:
             found.append((WARN, f"no command for {command_age_s:.1f} s (timeout "
-                                f"{command_timeout_s:g} s); holding the last valid command"))
+                                f"{command_timeout_s:g} s); holding the last valid command"
+                          if commands.received else
+                          f"no command received yet ({command_age_s:.1f} s since start, "
+                          f"timeout {command_timeout_s:g} s); holding the initial commands"))
     found.sort(key=lambda c: -c[0])                 # worst first, stable otherwise
     return Status(max((c[0] for c in found), default=OK),
                   "; ".join(c[1] for c in found) if found else name, {

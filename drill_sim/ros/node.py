@@ -113,11 +113,9 @@ class RigNode(Node):
                 node=self.get_fully_qualified_name(), resolve=self.resolve_topic_name,
                 stamp_epoch_ns=0 if self.with_clock else self._epoch_ns, logger=self.get_logger(),
                 sensors=self.sensors.profile) if self.p["record"] else None
-        except RecordRefused as exc:
-            hint = "" if "expected" in str(exc) or "choose" in str(exc) else (
-                "; expected a new bag directory in an existing folder")
+        except RecordRefused as exc:             # it says what is expected
             raise SystemExit(f"drill_sim_node: parameter record = {self.p['record']!r}: "
-                             f"{exc}{hint} (nothing was run)") from None
+                             f"{exc} (nothing was run)") from None
         self.pacer = Pacer(self.p["rate_hz"], self.p["real_time_factor"],
                            self._back_to_back(self.p), self.p["diagnostics_period_s"],
                            self.rig.time_s)

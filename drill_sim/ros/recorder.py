@@ -34,8 +34,8 @@ class RecordRefused(Exception):
 
 class SessionRecorder:
     """Records one rig session into the new bag directory named by the ``record`` parameter.
-    Never raises: ``error`` says why it does not record (any more), for the node's diagnostics.
-    """
+    Raises RecordRefused only at start, when the bag cannot be opened; after that never:
+    ``error`` says why it does not record any more, for the node's diagnostics."""
 
     def __init__(self, *, p: dict[str, object], rig: Rig, preset: str, node: str,
                  resolve: Callable[[str], str], stamp_epoch_ns: int, logger,
@@ -70,10 +70,13 @@ class SessionRecorder:
             for t in rig_topics.recorded(with_clock):
                 qos = t.qos if t is rig_topics.DIAGNOSTICS_TOPIC else offered
                 self.writer.add_topic(self.names[t.name], t.type_name, [qos.as_dict()])
-        except (OSError, BagError) as exc:
+        except BagError as exc:
             # at start nothing has run yet: the node refuses to start (a session asked to
             # be recorded and not recorded would be lost); a failure later leaves it running
             raise RecordRefused(str(exc)) from None
+        except OSError as exc:
+            raise RecordRefused(f"bag {p['record']}: cannot write it: {exc.strerror}; expected "
+                                "a new bag directory in an existing folder") from None
         logger.info(f"recording to {p['record']}")
 
     def set_split(self, duration_s: float, size_bytes: int) -> None:
