@@ -32,7 +32,8 @@ setup(
         "matplotlib>=3.8",
     ],
     extras_require={
-        "test": ["pytest>=8", "hypothesis>=6.100", "ruff>=0.6", "colcon-common-extensions>=0.3",
+        "test": ["pytest>=8", "pytest-xdist>=3.5", "hypothesis>=6.100", "ruff>=0.6",
+                 "colcon-common-extensions>=0.3",
                  "rosbags>=0.10", "mcap-ros2-support>=0.5", "dask[distributed]>=2024.1"],
         "map-cluster": ["dask[distributed]>=2024.1"],   # drill_sim map --scheduler
     },
@@ -44,12 +45,12 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            "drill_sim = drill_sim.cli.main:main",
-            "drill_sim_node = drill_sim.ros.node:main",
-            "drill_sim_drive = drill_sim.ros.driver:main",
-            "drill_sim_controller = drill_sim.ros.controller:main",
-            "drill_sim_record = drill_sim.cli.record:main",
-            "drill_sim_replay = drill_sim.cli.replay:main",
+            "drill_sim = drill_sim.entry_points:drill_sim",
+            "drill_sim_node = drill_sim.entry_points:node",
+            "drill_sim_drive = drill_sim.entry_points:drive",
+            "drill_sim_controller = drill_sim.entry_points:controller",
+            "drill_sim_record = drill_sim.entry_points:record",
+            "drill_sim_replay = drill_sim.entry_points:replay",
         ],
     },
 )

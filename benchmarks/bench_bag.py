@@ -20,7 +20,7 @@ from pathlib import Path
 
 from drill_sim.bag.writer import BagWriter
 from drill_sim.core import RPM, Rig, load_preset
-from drill_sim.wire.rig_messages import RigEncoders
+from drill_sim.session.rig_messages import RigEncoders
 
 BIN = Path(sys.executable).parent
 EPOCH_NS = 1_700_000_000_000_000_000

@@ -11,7 +11,7 @@ from rclpy.serialization import serialize_message
 from drill_sim.bag.mcap_scan import OP_CHUNK, OP_MESSAGE_INDEX, McapScan
 from drill_sim.bag.writer import BagWriter
 from drill_sim.core import RPM, Rig, RigSample, load_preset
-from drill_sim.wire.rig_messages import RigEncoders
+from drill_sim.session.rig_messages import RigEncoders
 
 T0_NS = 1_700_000_000_000_000_000
 

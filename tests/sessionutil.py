@@ -7,10 +7,11 @@ import math
 from collections.abc import Iterable
 
 from drill_sim.bag.writer import BagWriter
-from drill_sim.core import RigSample, load_preset, session
+from drill_sim.core import RigSample, load_preset
 from drill_sim.core.sensors import session_sensors
 from drill_sim.ros.parameters import specs
-from drill_sim.wire.rig_messages import RigEncoders
+from drill_sim.session import rules
+from drill_sim.session.rig_messages import RigEncoders
 
 WALL0_NS = 1_700_000_000_000_000_000
 
@@ -24,8 +25,8 @@ def session_bag(path, ticks: int, *, rate_hz: float = 100.0, speedup: float = 10
     ``dt_s`` itself, the step not in the metadata)."""
     p = {s.name: s.default for s in specs(load_preset("base"))}
     p.update(publish_clock=True, rate_hz=rate_hz, max_speed=True, record=str(path))
-    rig = session.make_rig(p, None if recorded_step else p["dt_s"])
-    session.start(rig, p)
+    rig = rules.make_rig(p, None if recorded_step else p["dt_s"])
+    rules.start(rig, p)
     sensors = session_sensors(p, rig.dt_s)
     meta = {"parameters": {k: str(v) for k, v in sorted(p.items())},
             "session": {"preset": "base", "node": node, "stamp_epoch_ns": "0",

@@ -13,20 +13,22 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..control import LAWS
+from ..control.closed_loop import run_loop
 from ..control.evaluation import (
+    DEFAULT_PERTURBATION,
     DEFAULT_SAMPLE_PERIOD_S,
     LoopResult,
     LoopSettings,
     Scenario,
     build_law,
     law_top_drive,
-    run_loop,
     sensor_profiles,
 )
 from ..control.reference import reference_gains
 from ..control.scenarios import SETS, named
 from ..core import load_preset
 from ..core.distributed import STRING_MODELS
+from ..session.parameter_table import PERTURBATION_RANGE
 from ..terminal import Progress
 from .case import RPM_MAX
 from .checks import in_range, json_line, number, output_file, plot_file, whole
@@ -108,6 +110,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "answer each tick on the rig's ~/cmd/top_drive_torque with the "
                              "tick's stamp; run under the namespace the rig gets); one row, "
                              "named by the first law of --laws")
+    parser.add_argument("--perturbation", type=number, default=DEFAULT_PERTURBATION,
+                        help="relative perturbation of the steady start's bit speed, "
+                             f"{PERTURBATION_RANGE[0]:g} to {PERTURBATION_RANGE[1]:g}; default "
+                             f"{DEFAULT_PERTURBATION:g} (lets stick-slip grow from the start; "
+                             "with --ros the rig node's initial_perturbation)")
+    parser.add_argument("--record", type=Path, default=None, metavar="DIR",
+                        help="record each run as the rig node would, a bag per row "
+                             "DIR/<scenario>-<law>, which drill_sim bag resim re-runs exactly "
+                             "(offline only)")
     parser.add_argument("--json", action="store_true",
                         help="print the table as one JSON object (strict: null, never NaN)")
 
@@ -133,9 +144,24 @@ def run(args: argparse.Namespace) -> int:
         law_gains.update(gains.get(law, {}))
         one = LoopSettings(law=law, gains=law_gains, sample_period_s=h, top_drive=drive,
                            string_model=args.string_model, sensor_profile=args.sensor_profile,
-                           sensor_seed=whole("--sensor-seed", args.sensor_seed, 0, 2**63 - 1))
+                           sensor_seed=whole("--sensor-seed", args.sensor_seed, 0, 2**63 - 1),
+                           perturbation=in_range("--perturbation", args.perturbation,
+                                                 *PERTURBATION_RANGE,
+                                                 what="a relative perturbation of the bit speed"))
         build_law(preset, one, law_top_drive(preset, law, drive))   # bad gains: before any run
         settings.append(one)
+    if args.record is not None:
+        if args.ros:
+            raise UsageError("--record with --ros: the rig node records its own session "
+                             "(-p record:=BAG); expected --record for offline runs")
+        if args.record.exists():
+            raise UsageError(f"--record {args.record}: it exists; expected a new directory "
+                             "(a bag per row goes into it)")
+        try:
+            args.record.mkdir()
+        except OSError as exc:
+            raise UsageError(f"--record {args.record}: cannot create it ({exc.strerror}); "
+                             "expected a new directory in an existing folder") from None
     if args.ros_controller is not None and not args.ros:
         raise UsageError("--ros-controller needs --ros")
     if args.ros_controller is not None:
@@ -155,7 +181,10 @@ def run(args: argparse.Namespace) -> int:
                 if args.ros:
                     results.append(_ros_row(preset, scenario, one, args.ros_controller, report))
                 else:
-                    results.append(run_loop(preset, scenario, one, progress=report))
+                    bag = (None if args.record is None
+                           else args.record / f"{scenario.name}-{one.law}")
+                    results.append(run_loop(preset, scenario, one, progress=report,
+                                            record=bag))
     finally:
         progress.close()
     document = _document(args, preset.name, drive, h, results, settings)

@@ -16,12 +16,10 @@ import time
 from datetime import datetime
 from pathlib import Path
 
-from rclpy.utilities import remove_ros_args
-
 from .. import __version__
 from ..bag.writer import BagError, BagWriter
 from ..ros.record import TopicSelection, record
-from ..ros.stopping import init_stoppable
+from ..ros.stopping import init_stoppable, without_ros_args
 from .checks import in_range, integer, join_negative_values, new_bag, number, whole
 from .errors import Parser, UsageError
 
@@ -115,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
     add_arguments(parser)
     parser.set_defaults(argv=argv)
     try:
-        return run(parser.parse_args(join_negative_values(remove_ros_args(argv)[1:])))
+        return run(parser.parse_args(join_negative_values(without_ros_args(argv)[1:])))
     except UsageError as exc:
         print(f"drill_sim_record: error: {exc}", file=sys.stderr)
         return 2

@@ -13,13 +13,10 @@ import argparse
 import sys
 from pathlib import Path
 
-import rclpy
-from rclpy.utilities import remove_ros_args
-
 from ..bag.bag import Bag, BagInfo
 from ..bag.errors import BagError
 from ..ros.replay import Player, PlayOptions
-from ..ros.stopping import init_stoppable
+from ..ros.stopping import init_stoppable, shutdown, without_ros_args
 from ..terminal import StatusLine
 from .checks import in_range, integer, join_negative_values, number, whole
 from .errors import Parser, UsageError
@@ -152,7 +149,7 @@ def _play(args: argparse.Namespace, argv: list[str], bag: Path, source: Bag, fou
             return 1                                # damage the bag's info did not show
     finally:
         player.destroy_node()
-        rclpy.try_shutdown()
+        shutdown()
     return 0
 
 
@@ -168,7 +165,7 @@ def main(argv: list[str] | None = None) -> int:
     add_arguments(parser)
     parser.set_defaults(argv=argv)
     try:
-        return run(parser.parse_args(join_negative_values(remove_ros_args(argv)[1:])))
+        return run(parser.parse_args(join_negative_values(without_ros_args(argv)[1:])))
     except UsageError as exc:
         print(f"drill_sim_replay: error: {exc}", file=sys.stderr)
         return 2

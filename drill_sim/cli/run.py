@@ -7,11 +7,7 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
-import shutil
-import subprocess
 import sys
-import time
 from datetime import datetime
 from pathlib import Path
 
@@ -20,9 +16,10 @@ import numpy as np
 from ..bag.errors import BagError
 from ..bag.series import RigSeries, rig_series
 from ..core import RPM, load_preset
-from ..core.diagnostics import drilling_regime
-from ..core.pacing import CATCH_UP_TICKS
-from ..core.scenario import load_scenario
+from ..programs import program
+from ..session.diagnostics import drilling_regime
+from ..session.pacing import CATCH_UP_TICKS
+from ..session.scenario import load_scenario
 from .checks import in_range, new_bag, number, plot_file
 from .errors import UsageError
 from .plot import plot_rig_series
@@ -31,16 +28,6 @@ STATUS_WINDOW_S = 1.0          # the stretch of samples the status line names th
 COMPARE_WINDOW_S = 10.0        # before/after a controller is switched on: the last ... of each
 
 MAX_DURATION_S = 1e6     # --duration [s] (documented in msg_docs/cli.md, "Limits")
-DISCOVERY_S = 0.5        # before the rig starts: how long to look for a rig already running
-OTHER_RIG_LOOK_S = 0.5   # during the session: how often to look for a second rig
-
-
-def executable(name: str) -> str:
-    beside = Path(sys.executable).parent / name
-    found = str(beside) if beside.exists() else shutil.which(name)
-    if found is None:
-        raise OSError(f"{name} is not installed (pip install the package first)")
-    return found
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -64,12 +51,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor
-
-    from ..ros.monitor import Monitor
-    from ..ros.stopping import stop_processes
-    from ..ros.topics import NOT_YET_NAMED
+    from ..ros.session_watch import watch_session
 
     if args.no_record and args.record is not None:
         raise UsageError(f"--no-record with --record {args.record}: they contradict each other; "
@@ -87,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         bag = new_bag("--record", Path(datetime.now().strftime(
             "drill_sim_session_%Y_%m_%d-%H_%M_%S")))
-    node_cmd = [executable("drill_sim_node"), "--ros-args", "-p", f"preset:={args.preset}",
+    node_cmd = [program("drill_sim_node"), "--ros-args", "-p", f"preset:={args.preset}",
                 "-p", f"initial_state:={scenario.initial_state}",
                 *(("-p", f"record:={bag.absolute()}") if bag is not None else ()),
                 *args.ros_args]
@@ -96,52 +78,12 @@ def run(args: argparse.Namespace) -> int:
     if switch is not None:
         node_cmd[2:2] = ["-p", "top_drive_mode:=speed"]     # the user's -p come later, and win
         procs_before.append(controller_command(preset, switch.law))
-    drive_cmd = [executable("drill_sim_drive"), args.scenario]
-    env = dict(os.environ)
-    rclpy.init()
-    monitor = Monitor()
-    executor = SingleThreadedExecutor()
-    executor.add_node(monitor)
-    # a rig of this name already on the domain would mix with this session's: look before
-    # starting one (discovery of a local rig mostly takes ~0.05 s), and all along the session
-    # (it may take ~3 s)
-    end = time.monotonic() + DISCOVERY_S
-    while time.monotonic() < end and not monitor.other_rigs(first_included=True):
-        executor.spin_once(timeout_sec=0.02)
-    end = time.monotonic() + DISCOVERY_S          # found: its name may come a moment later
-    while NOT_YET_NAMED in monitor.other_rigs(first_included=True) and time.monotonic() < end:
-        executor.spin_once(timeout_sec=0.02)
-    others = monitor.other_rigs(first_included=True)
-    procs = [] if others else [subprocess.Popen(node_cmd, env=env)]
-    tty = sys.stdout.isatty()
-    node_exit = None
-    try:
-        # the driver starts once the rig publishes: a node that refuses its parameters has
-        # printed its one line and run ends there, with the node's status 2
-        while not others and monitor.count == 0 and node_exit is None:
-            executor.spin_once(timeout_sec=0.05)
-            node_exit = procs[0].poll()
-        if not others and node_exit is None:
-            procs += [subprocess.Popen(cmd, env=env) for cmd in procs_before]
-            procs.append(subprocess.Popen(drive_cmd, env=env))
-            node_exit = _live(executor, monitor, procs[0], duration, tty)
-    except KeyboardInterrupt:
-        pass
-    except OtherRig as exc:
-        others = exc.args[0]
-    finally:
-        if tty:
-            print()
-        # the clients first, then the rig: a controller in charge of the drive hands it back
-        # to the rig's speed loop as it stops, which needs the rig still there
-        stop_processes(procs[1:])
-        stop_processes(procs[:1])
-        received = monitor.series()
-        executor.shutdown()
-        monitor.destroy_node()
-        rclpy.try_shutdown()
+    drive_cmd = [program("drill_sim_drive"), args.scenario]
+    watched = watch_session(node_cmd, procs_before, drive_cmd, duration,
+                            sys.stdout.isatty(), _status_line)
+    others, node_exit, received = watched.others, watched.node_exit, watched.received
     if others:
-        print(f"drill_sim run: another rig publishes on {monitor.topic} ({', '.join(others)}): "
+        print(f"drill_sim run: another rig publishes on {watched.topic} ({', '.join(others)}): "
               "the session would mix both rigs' samples and send the driller's commands to "
               "both, so it stopped; stop that rig, or run this session on another "
               "ROS_DOMAIN_ID (ROS_DOMAIN_ID=7 drill_sim run)", file=sys.stderr)
@@ -188,7 +130,7 @@ def controller_command(preset, law: str) -> list[str]:
               f"{law}.torque_max_nm": drive.motor_torque_max_nm}
     params.update({f"{law}.{k}": v for k, v in reference_gains(
         law, preset, drive.top_drive_inertia_kg_m2).items()})
-    cmd = [executable("drill_sim_controller"), "--ros-args"]
+    cmd = [program("drill_sim_controller"), "--ros-args"]
     for name, value in params.items():
         text = str(value).lower() if isinstance(value, bool) else (
             repr(float(value)) if isinstance(value, (int, float)) else value)
@@ -218,41 +160,19 @@ def _before_after(series: RigSeries, law: str, on_s: float) -> str:
     return f"{before['ssi']:.2f} → {after['ssi']:.2f}"
 
 
-class OtherRig(Exception):
-    """Another rig publishes on the session rig's topics (names: fully qualified nodes)."""
-
-
-def _live(executor, monitor, node: subprocess.Popen, duration: float, tty: bool) -> int | None:
-    """Spin the monitor for ``duration`` (+2 s) with the status line; the node's exit status
-    if it stopped meanwhile. Raises OtherRig when a second rig appears on the session's
-    topics (discovery of one already running may take ~3 s)."""
-    start = time.monotonic()
-    last_print = last_look = 0.0
-    while time.monotonic() - start < duration + 2.0:
-        executor.spin_once(timeout_sec=0.02)
-        if node.poll() is not None:
-            return node.returncode
-        now = time.monotonic()
-        if now - last_look > OTHER_RIG_LOOK_S:
-            last_look = now
-            if others := monitor.other_rigs():
-                raise OtherRig(others)
-        if now - last_print > (0.2 if tty else 5.0):
-            last_print = now
-            s = monitor.latest()
-            if s is not None:
-                name = regime(monitor.recent(STATUS_WINDOW_S), monitor.flag)
-                line = (f"t {s['elapsed_s']:6.1f} s | bit "
-                        f"{s['bit_speed_rad_s'] / RPM:6.1f} rpm (top drive "
-                        f"{s['top_drive_speed_rad_s'] / RPM:5.1f}) | WOB "
-                        f"{s['wob_n'] / 1e3:6.1f} kN | TOB {s['tob_nm'] / 1e3:5.2f} kN m | "
-                        f"{name:<21}")
-                print(("\r" + line) if tty else line, end="" if tty else "\n", flush=True)
-    return None
+def _status_line(monitor) -> str | None:
+    """The live status line of the latest sample the monitor received (None: none yet)."""
+    s = monitor.latest()
+    if s is None:
+        return None
+    name = regime(monitor.recent(STATUS_WINDOW_S), monitor.flag)
+    return (f"t {s['elapsed_s']:6.1f} s | bit {s['bit_speed_rad_s'] / RPM:6.1f} rpm (top drive "
+            f"{s['top_drive_speed_rad_s'] / RPM:5.1f}) | WOB {s['wob_n'] / 1e3:6.1f} kN | TOB "
+            f"{s['tob_nm'] / 1e3:5.2f} kN m | {name:<21}")
 
 
 def regime(series: RigSeries, stick_flag: bool = False) -> str:
-    """The drilling regime of a stretch of samples (``core.diagnostics.drilling_regime``,
+    """The drilling regime of a stretch of samples (``session.diagnostics.drilling_regime``,
     as /diagnostics names it): SSI of the bit speed, stuck samples or the node's stick-slip
     flag, off bottom where the WOB is zero."""
     w = series.bit_speed_rad_s

@@ -19,6 +19,7 @@ from ..core import DEFAULT_DT, NoSteadyDrilling, steady_state
 from ..core.distributed import STRING_MODELS, geometry_waves
 from ..core.simulator import max_step
 from ..core.top_drive import MODES, TopDriveParameters
+from ..session.parameter_table import PERTURBATION_RANGE
 from ..study.single import RunSettings, default_start
 from .case import Case
 from .checks import in_range, number, typed
@@ -29,7 +30,6 @@ MAX_STEPS = 1_000_000_000      # per run: about a minute of one core at 20+ mill
 STEPS_PER_S = 20e6             # for the time estimate in a refusal
 GAP_MAX_M = 10.0               # bit height above bottom, SI [m]
 GAP_MAX = 1e4                  # the same, dimensionless [L*]
-PERTURBATION_RANGE = (-0.9, 1.0)
 # the top drive's options: (dest, unit, SI factor, low, high, what), ranges in the unit
 DRIVE_OPTIONS = (
     ("top_drive_inertia", "kg m^2", 1.0, 1.0, 1e5, "a top-drive inertia",

@@ -1,32 +1,19 @@
-"""The offline closed loop: a Rig stepped one controller sample period h at a time, a law on its
-surface measurements, and the metrics that score it (msg_docs/control.md, "Evaluation").
-
-Sample instants are those of the rig node at ``rate_hz = 1/h``: the rig steps with the
-node's step, the largest divisor of h not above the default step (``core.session``: 100 µs at
-1 kHz on base), so the samples fall exactly on k·h as the node's ticks do; the law reads
-the sample there (through ``measure``, the sensor model; ideal by default) and its output is
-held until the next sample (zero-order hold). So the same law at the same h gives
-the same numbers here and through the nodes in lockstep.
-
-Torque laws drive a top drive in ``torque`` mode (inertia, limits, rate and lag as given);
-``kinematic`` drives the seed's ideal speed source. The law starts bumplessly from the steady
-state at the scenario's first set-point, with a small speed perturbation that lets stick-slip
-grow where it can.
+"""What the offline closed loop (``closed_loop``) runs and how it is scored: the scenario's
+set-points, the loop's settings, the sensors a law can read, and the metrics of a run
+(msg_docs/control.md, "Evaluation"), also from a recording's samples alone (``sample_metrics``).
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..core import RPM, Preset, Rig, RigSample, load_preset
+from ..core import RPM, Preset, Rig, RigSample
 from ..core.parameters import ParameterError, check_number
-from ..core.session import steps_per_tick
-from ..core.simulator import DEFAULT_DT
 from ..core.top_drive import TopDriveParameters
 from . import make_law
 from .laws import Law, SurfaceMeasurement
@@ -189,82 +176,7 @@ def build_law(preset: Preset, settings: LoopSettings, drive: TopDriveParameters)
                     drive.top_drive_inertia_kg_m2, **gains)
 
 
-def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *,
-             progress: Callable[[float], None] | None = None) -> LoopResult:
-    """Close the loop over the scenario; see the module docstring for the sample instants."""
-    preset = load_preset(preset) if isinstance(preset, str) else preset
-    h = check_number("sample_period_s", settings.sample_period_s, high=1.0)
-    drive = law_top_drive(preset, settings.law, settings.top_drive)
-    law = build_law(preset, settings, drive)
-    measure = settings.measure or sensor_measurement(settings.sensor_profile, h,
-                                                     settings.sensor_seed)
-    steps = steps_per_tick(h, DEFAULT_DT * preset.rig.scales.time_s)
-    rig = Rig(preset.rig, h / steps, top_drive=drive, string_model=settings.string_model,
-              geometry=preset.string)
-    n = math.floor(scenario.duration_s / h + 1e-9)
-    times = np.arange(n + 1) * h
-    speed_set, wob_kn = scenario.values(times)
-    hook = preset.rig.submerged_weight_n - 1e3 * wob_kn
-    if np.any(hook < 0.0):
-        raise ParameterError(f"wob_kn up to {wob_kn.max():g} kN is out of range: expected at "
-                             f"most W_s = {preset.rig.submerged_weight_n / 1e3:g} kN")
-    start = speed_set[0] if scenario.start_rpm is None else check_number(
-        "start_rpm", scenario.start_rpm) * RPM
-    rig.start_steady(float(start), float(hook[0]), perturbation=settings.perturbation)
-    speed_law = law.output_kind == "speed"
-    switch_k = 0 if speed_law else math.ceil(scenario.switch_on_s / h - 1e-9)
-    active = law if switch_k == 0 else build_law(preset, replace(settings, law="stiff_pi",
-                                                                  gains={}), drive)
-    active.reset(float(speed_set[0]))
-    law.reset(float(speed_set[0]))
-    sample = rig.sample()
-    current = rig.commanded_speed_rad_s if speed_law else rig.commanded_motor_torque_nm
-    output = active.bumpless_start(current, measure(sample))
-    names = ("time_s", "bit_speed_rad_s", "top_drive_speed_rad_s", "surface_torque_nm",
-             "motor_torque_nm", "law_output", "stuck", "bit_depth_m", "top_drive_angle_rad",
-             "wob_n")
-    series = {k: np.empty(n + 1) for k in names}
-    _record(series, 0, sample, output)
-    window_k = max(1, math.ceil(scenario.window_start_s / h - 1e-9))
-    every = max(1, n // 200)
-    for k in range(1, n + 1):
-        if speed_law:
-            rig.command(output, float(hook[k - 1]))
-        else:
-            rig.command(float(speed_set[k - 1]), float(hook[k - 1]))
-            rig.command_motor_torque(output)
-        rig.advance_steps(steps)
-        if k == window_k:
-            rig.reset_metrics_window()
-        sample = rig.sample()
-        measurement = measure(sample)
-        if k == switch_k:
-            law.set_speed(float(speed_set[k]))
-            output = law.bumpless_start(output, measurement)
-            active = law
-        else:
-            active.set_speed(float(speed_set[k]))
-            output = active.step(measurement)
-        _record(series, k, sample, output)
-        if progress is not None and k % every == 0:
-            progress(k / n)
-    return _result(preset, scenario, settings, drive, rig, series, window_k)
-
-
-def _record(series: dict[str, np.ndarray], k: int, s: RigSample, output: float) -> None:
-    series["time_s"][k] = s.time_s
-    series["bit_speed_rad_s"][k] = s.bit_speed_rad_s
-    series["top_drive_speed_rad_s"][k] = s.top_drive_speed_rad_s
-    series["surface_torque_nm"][k] = s.surface_torque_nm
-    series["motor_torque_nm"][k] = s.motor_torque_nm
-    series["law_output"][k] = output
-    series["stuck"][k] = s.stuck
-    series["bit_depth_m"][k] = s.bit_depth_m
-    series["top_drive_angle_rad"][k] = s.top_drive_angle_rad
-    series["wob_n"][k] = s.wob_n
-
-
-def _result(preset: Preset, scenario: Scenario, settings: LoopSettings,
+def loop_result(preset: Preset, scenario: Scenario, settings: LoopSettings,
             drive: TopDriveParameters, rig: Rig, series: dict[str, np.ndarray],
             window_k: int) -> LoopResult:
     m = rig.metrics()
@@ -336,13 +248,3 @@ def sample_metrics(preset: Preset, series: Mapping[str, np.ndarray], window_star
         surface_torque_rms_nm=float(torque.std()), mean_surface_torque_nm=float(torque.mean()),
         saturation_fraction=saturated, saturation_time_s=saturated * span, mse_pa=mse,
         window_s=float(span), series=dict(series))
-
-
-def run_laws(preset: Preset | str, scenario: Scenario, laws: Sequence[str],
-             base: LoopSettings | None = None, *,
-             gains: Mapping[str, Mapping[str, float]] | None = None) -> list[LoopResult]:
-    """Each law in turn on the same scenario and settings (gains per law name)."""
-    base = base or LoopSettings(law="kinematic")
-    gains = gains or {}
-    return [run_loop(preset, scenario, replace(base, law=name, gains=gains.get(name, {})))
-            for name in laws]

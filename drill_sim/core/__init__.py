@@ -8,10 +8,10 @@ from .metrics import Metrics
 from .parameters import Groups, ParameterError, RigParameters, Scales, StringGeometry
 from .presets import Preset, load_preset, preset_names
 from .rig import RPM, Rig, RigSample
-from .si_trajectory import SITrajectory
 from .simulator import DEFAULT_DT, Simulator, StateView, Trajectory
 from .stability import NoSteadyDrilling, StabilityResult, SteadyState, stability, steady_state
 from .top_drive import DriveGroups, TopDriveParameters
+from .trajectory import SITrajectory
 
 __all__ = [
     "DEFAULT_DT", "RPM", "DriveGroups", "Groups", "Metrics", "NoSteadyDrilling", "ParameterError",

@@ -25,7 +25,6 @@ import math
 import os
 import shlex
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -35,19 +34,13 @@ from ..control.evaluation import LoopSettings, Scenario, law_top_drive
 from ..control.tuning import pipe_impedance
 from ..core import RPM, Preset
 from ..core.parameters import ParameterError
+from ..programs import program
 
 NS = "/drill_sim_control"
 RIG = f"{NS}/drill_sim"
 SETPOINT = f"{NS}/speed_setpoint"        # this process's stamped set-points to the controller
 SERIES = ("bit_speed_rad_s", "stuck", "surface_torque_nm", "motor_torque_nm", "bit_depth_m",
           "top_drive_angle_rad", "wob_n", "top_drive_speed_rad_s")
-
-
-def executable(name: str) -> str:
-    beside = Path(sys.executable).parent / name
-    if not beside.exists():
-        raise OSError(f"{name} is not installed beside {sys.executable}")
-    return str(beside)
 
 
 def check_ros(scenario: Scenario, *, user_command: str | None = None) -> None:
@@ -95,8 +88,9 @@ def rig_command(preset: Preset, scenario: Scenario, settings: LoopSettings) -> l
               "motor_torque_min_nm": repr(drive.motor_torque_min_nm),
               "initial_state": "steady", "initial_top_drive_speed_rad_s": repr(speed),
               "initial_weight_on_bit_n": repr(wob), "sensor_profile": settings.sensor_profile,
-              "sensor_seed": str(settings.sensor_seed), "string_model": settings.string_model}
-    cmd = [executable("drill_sim_node"), "--ros-args", "-r", f"__ns:={NS}"]
+              "sensor_seed": str(settings.sensor_seed), "string_model": settings.string_model,
+              "initial_perturbation": repr(float(settings.perturbation))}
+    cmd = [program("drill_sim_node"), "--ros-args", "-r", f"__ns:={NS}"]
     for k, v in params.items():
         cmd += ["-p", f"{k}:={v}"]
     return cmd
@@ -124,7 +118,7 @@ def controller_command(preset: Preset, scenario: Scenario, settings: LoopSetting
               "stiff_pi.torque_min_nm": repr(drive.motor_torque_min_nm),
               "stiff_pi.torque_max_nm": repr(drive.motor_torque_max_nm)}
     params.update({f"{settings.law}.{k}": repr(float(v)) for k, v in settings.gains.items()})
-    cmd = [executable("drill_sim_controller"), "--ros-args", "-r", f"__ns:={NS}"]
+    cmd = [program("drill_sim_controller"), "--ros-args", "-r", f"__ns:={NS}"]
     for k, v in params.items():
         cmd += ["-p", f"{k}:={v}"]
     return cmd

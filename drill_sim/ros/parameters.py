@@ -19,7 +19,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from ..core import ParameterError, Preset, load_preset
-from .parameter_table import (
+from ..session.parameter_table import (
     BOOL,
     FLOAT,
     INT,

@@ -56,6 +56,16 @@ def init_stoppable(args: list[str] | None, ros_args_only: bool = False) -> list[
     return stop
 
 
+def without_ros_args(argv: list[str]) -> list[str]:
+    """``argv`` without its ROS arguments (``--ros-args ... --``), as rclpy parses them."""
+    return rclpy.utilities.remove_ros_args(argv)
+
+
+def shutdown() -> None:
+    """rclpy's shutdown, if it is still up."""
+    rclpy.try_shutdown()
+
+
 def stop_processes(procs: list[subprocess.Popen], timeout_s: float = 10.0) -> None:
     """Ask each child still running to stop (SIGINT: it stops at its next safe point, so its
     bag is closed properly), then wait for each; one that has not ended in ``timeout_s`` [s]

@@ -102,3 +102,38 @@ def cpu_latency_now_us(device: str = CPU_LATENCY_DEVICE) -> int | None:
             return struct.unpack("=i", f.read(4))[0]
     except (OSError, struct.error):
         return None
+
+
+def take_thread_priority(p: dict, max_speed: bool, logger) -> None:
+    """``thread_priority`` > 0: this (the loop's) thread under SCHED_FIFO, in real time and
+    lockstep; not at max speed (``max_speed``: the loop never sleeps), where it would starve
+    the machine's other programs. Refused, the rig runs on and says why (``logger``)."""
+    priority = int(p["thread_priority"])
+    if not priority:
+        return
+    if max_speed:
+        logger.info(f"thread_priority {priority} not taken at max speed (its loop never "
+                    "sleeps: under SCHED_FIFO it would starve the machine's other programs)")
+        return
+    refused = run_at_priority(priority)
+    if refused is None:
+        logger.info(f"ticking under SCHED_FIFO, priority {priority}")
+    else:
+        logger.warning(f"thread_priority {priority} not taken: {refused}; ticking under the "
+                       "default scheduler")
+
+
+def request_cpu_latency(p: dict, logger) -> CpuLatencyRequest | None:
+    """``cpu_wakeup_latency_us`` >= 0: the request held open for the node's life (closed at
+    shutdown, or by the kernel if the process dies). Refused, the rig runs on and says why."""
+    latency_us = int(p["cpu_wakeup_latency_us"])
+    if latency_us < 0:
+        return None
+    request = CpuLatencyRequest(latency_us)
+    if request.held:
+        logger.info(f"idle cores held to wake-ups of at most {latency_us} us while the node "
+                    "runs (the whole machine's setting)")
+    else:
+        logger.warning(f"cpu_wakeup_latency_us {latency_us} not taken: {request.refused}; "
+                       "idle cores sleep as the machine sets")
+    return request

@@ -7,7 +7,7 @@ fills which message field, with its SI unit. The node creates its publishers, su
 services by walking the table, and its outputs' encoders are compiled from it (``rig_messages``),
 so adding an output is one entry here plus its line in msg_docs/node.md. Which field of a
 command carries it, and the limit that applies, are the session's rules: ``command`` names the
-rule in ``core.session.COMMANDS``.
+rule in ``session.rules.COMMANDS``.
 
 Outputs are published every tick in table order (``/clock`` first when published). Most carry
 the model's exact state (for evaluation and plots); those under ``~/measured/`` carry what the
@@ -63,7 +63,7 @@ class RigTopic:
     fields: tuple[Field, ...] = ()     # outputs: what fills the message; stamps are implicit
     frame_id: str = ""                 # header.frame_id of outputs
     joints: tuple[str, ...] = ()       # JointState names
-    command: str = ""                  # commands: the rule in core.session.COMMANDS
+    command: str = ""                  # commands: the rule in session.rules.COMMANDS
     source: str = SAMPLE               # outputs: SAMPLE (exact state) or MEASURED (sensors)
 
     def under(self, node: str) -> str:

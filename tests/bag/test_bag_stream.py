@@ -27,6 +27,8 @@ def _peak_bytes(argv: list[str]) -> int:
         tracemalloc.stop()
 
 
+@pytest.mark.slow("tracemalloc traces every allocation while bags of 10 000 and 40 000 "
+                  "samples are read: flat memory shows only against a bag four times the size")
 def test_metrics_memory_does_not_grow_with_the_bag(tmp_path, capsys):
     short, long = tmp_path / "short", tmp_path / "long"
     rig_bag(short, 10_000)

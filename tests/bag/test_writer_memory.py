@@ -10,6 +10,7 @@ import time
 import tracemalloc
 import weakref
 
+import pytest
 from mcap.reader import make_reader
 
 from drill_sim.bag import reader
@@ -20,6 +21,8 @@ T0 = 1_700_000_000_000_000_000
 TOPICS = [f"/rig/topic_{i}" for i in range(12)]          # as many channels as the node's bag
 
 
+@pytest.mark.slow("the memory kept per chunk shows only over thousands of chunks, traced "
+                  "allocation by allocation")
 def test_memory_kept_per_chunk_is_a_few_hundred_bytes(tmp_path):
     w = BagWriter(tmp_path / "many_chunks")            # chunks close on flush only
     for name in TOPICS:
@@ -79,6 +82,8 @@ class _SlowFile(io.BytesIO):
         return super().write(data)
 
 
+@pytest.mark.slow("a disk slowed on purpose must fall behind by many chunks for the bound "
+                  "to show")
 def test_chunks_waiting_for_a_slow_disk_are_bounded_and_none_is_lost():
     """The writing thread lags a slow disk; the chunks handed to it must stay under the
     writer's bound (the adding thread waits, counted) and every message must reach the file."""

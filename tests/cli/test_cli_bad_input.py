@@ -15,7 +15,7 @@ from conftest import installed
 
 from drill_sim.cli.checks import finite_or_none, join_negative_values, json_line
 from drill_sim.core import ParameterError, load_preset
-from drill_sim.core.scenario import load_scenario
+from drill_sim.session.scenario import load_scenario
 
 MEMORY_CAP = 3 << 30       # bytes of address space per command: a regression fails, not the host
 GROUPS = "n=4,psi=13.73,lambda=6.84,beta=0.36"

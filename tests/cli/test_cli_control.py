@@ -11,7 +11,8 @@ import pytest
 from conftest import installed
 
 from drill_sim.cli.main import main
-from drill_sim.control.evaluation import LoopSettings, Scenario, run_loop
+from drill_sim.control.closed_loop import run_loop
+from drill_sim.control.evaluation import LoopSettings, Scenario
 from drill_sim.control.reference import reference_gains
 from drill_sim.core import load_preset
 
@@ -101,3 +102,33 @@ def test_main_job_switches_the_scenarios_controller_on_and_compares(tmp_path):
     # stopped in order, the controller hands the drive back while the rig is still there
     assert "top drive is back on its speed loop" in proc.stderr, proc.stderr
     assert "[ERROR]" not in proc.stderr, proc.stderr
+
+
+def test_the_start_perturbation_is_one_option_and_an_offline_run_writes_an_exact_bag(
+        tmp_path, capsys):
+    """``--perturbation`` sets the steady start's perturbation (today's 1e-3 by default; the
+    rig node's ``initial_perturbation`` is the same start), and ``--record`` writes each row
+    as the node would record it, which ``drill_sim bag resim`` re-runs bit for bit."""
+    point = ["control", "--rpm", "60", "--wob-kn", "100", "--duration", "4", "--laws",
+             "z_torque", "--json"]
+    printed = {}
+    for value in ("0", "0.002", None):
+        extra = [] if value is None else ["--perturbation", value]
+        record = ["--record", str(tmp_path / "bags")] if value is None else []
+        assert main([*point, *extra, *record]) == 0
+        printed[value] = json.loads(capsys.readouterr().out)["rows"][0]["ssi"]
+    preset = load_preset("base")
+    gains = reference_gains("z_torque", preset, 2900.0)
+    scenario = Scenario.steady(60, 100, duration_s=4, window_start_s=2)
+    for value, p in (("0", 0.0), ("0.002", 2e-3), (None, 1e-3)):
+        offline = run_loop(preset, scenario, LoopSettings(law="z_torque", gains=gains,
+                                                          perturbation=p))
+        assert printed[value] == offline.ssi, value
+    assert printed["0"] < 1e-6 < min(printed[None], printed["0.002"])   # steady unless perturbed
+    bag = tmp_path / "bags" / "60rpm_100kN-z_torque"
+    done = subprocess.run([installed("drill_sim"), "bag", "resim", str(bag), "--json"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    assert result["exact"] is True and result["samples"] == 4001
+    assert result["commands"] >= 4000 and result["refused"] == 0

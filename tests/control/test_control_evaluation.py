@@ -13,11 +13,16 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from drill_sim.control.evaluation import LoopSettings, Scenario, run_loop
+from drill_sim.control.closed_loop import run_loop
+from drill_sim.control.evaluation import LoopSettings, Scenario
 from drill_sim.control.reference import reference_gains
 from drill_sim.core import RPM, ParameterError, Rig, load_preset
 
 J_TD = 2900.0
+# closed loops of 40 s simulated at 1 kHz: stick-slip must establish (~20 s) before a law is
+# seen to clear it or not, and the window after it must hold several of its 1.3 s periods
+LONG = pytest.mark.slow("closed loops of 40 s simulated at 1 kHz: stick-slip establishes "
+                        "in ~20 s before a law is seen to clear it")
 SCENARIO = Scenario.steady(60.0, 100.0, duration_s=40.0, window_start_s=20.0)
 
 
@@ -50,6 +55,7 @@ def test_kinematic_loop_is_the_rig_left_alone(preset):
     assert looped.mean_rop_m_h == pytest.approx(m["mean_rop_m_s"] * 3600.0, rel=1e-12)
 
 
+@LONG
 def test_kinematic_and_stiff_drive_stay_in_stick_slip(table):
     for law in ("kinematic", "stiff_pi"):
         r = table[law]
@@ -58,6 +64,7 @@ def test_kinematic_and_stiff_drive_stay_in_stick_slip(table):
         assert r.min_bit_speed_rpm == 0.0
 
 
+@LONG
 def test_z_torque_removes_sticking_and_raises_rop(table):
     r, stiff = table["z_torque"], table["kinematic"]
     assert r.stick_fraction == 0.0
@@ -67,6 +74,7 @@ def test_z_torque_removes_sticking_and_raises_rop(table):
     assert r.saturation_fraction == 0.0
 
 
+@LONG
 def test_z_torque_at_the_published_alpha_keeps_stick_slip_from_growing(preset):
     """α = 0.25 (Dwars, Simulator4nDOF) with the stiff-at-the-mode K_p, from the start."""
     gains = {**reference_gains("z_torque", preset, J_TD), "alpha": 0.25}
@@ -75,6 +83,7 @@ def test_z_torque_at_the_published_alpha_keeps_stick_slip_from_growing(preset):
     assert 0.2 < r.ssi <= 0.4
 
 
+@LONG
 def test_z_torque_without_its_torque_feedback_is_the_stiff_drive(preset):
     """α = 0 leaves the same stiff PI without the impedance match: stick-slip stays, so the
     torque feedback is what clears it."""
@@ -83,6 +92,7 @@ def test_z_torque_without_its_torque_feedback_is_the_stiff_drive(preset):
     assert r.stick_fraction > 0.2
 
 
+@LONG
 def test_z_torque_told_the_rig_s_signals_clears_stick_slip_through_them(preset):
     """With ``surface_rig`` (100 Hz, 10 ms late, noisy, the torque filtered): the reference
     Z-Torque told those signals (``reference_gains(..., sensor_profile=)``) clears the
@@ -101,10 +111,12 @@ def test_z_torque_told_the_rig_s_signals_clears_stick_slip_through_them(preset):
     assert untold.saturation_fraction > 0.5
 
 
+@LONG
 def test_soft_speed_with_inertia_compensation_reduces_ssi(table):
     assert table["soft_speed"].ssi < 0.8 * table["stiff_pi"].ssi
 
 
+@LONG
 def test_a_drive_that_cannot_brake_over_speeds_the_bit(preset):
     """Z-Torque switched on in stick-slip: a four-quadrant drive clears it at the set-point; one
     clamped at 0 N·m cannot take energy out of the slip phases, saturates at 0 and the bit

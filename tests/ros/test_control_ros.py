@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from drill_sim.control.evaluation import LoopSettings, Scenario, run_loop, sample_metrics
+from drill_sim.control.closed_loop import run_loop
+from drill_sim.control.evaluation import LoopSettings, Scenario, sample_metrics
 from drill_sim.control.reference import reference_gains
 from drill_sim.core import load_preset
 from drill_sim.ros.evaluation import run_ros

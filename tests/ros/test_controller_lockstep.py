@@ -1,6 +1,6 @@
 """The offline loop and the nodes in lockstep are the same loop: the installed rig node (torque
 mode, lockstep on its motor-torque command) and drill_sim_controller give, sample by sample, the
-bit speed and motor torque ``drill_sim.control.evaluation.run_loop`` computes in-process for the
+bit speed and motor torque ``drill_sim.control.closed_loop.run_loop`` computes in-process for the
 same law, gains, sample instants and start (steady at 60 rpm, set-point 61 rpm: a transient
 that the law must work through, its integral off the limits)."""
 
@@ -13,7 +13,8 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rosutil import NodeProcess, call_service, wait_for
 from std_srvs.srv import SetBool
 
-from drill_sim.control.evaluation import LoopSettings, Scenario, run_loop
+from drill_sim.control.closed_loop import run_loop
+from drill_sim.control.evaluation import LoopSettings, Scenario
 from drill_sim.control.reference import reference_gains
 from drill_sim.core import RPM, load_preset
 

@@ -21,7 +21,7 @@ from rosbags.typesys import Stores, get_typestore
 from rosgraph_msgs.msg import Clock
 from rosutil import NodeProcess, wait_for
 
-from drill_sim.bag.resim import resimulate
+from drill_sim.session.resim import resimulate
 
 CONTROLLER = Path(__file__).with_name("lockstep_controller.py")
 TICK_NS = 1_000_000                     # rate_hz 1000

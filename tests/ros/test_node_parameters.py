@@ -15,7 +15,7 @@ from rosutil import NodeProcess, call_service, wait_for
 from std_msgs.msg import Bool
 
 from drill_sim.core import load_preset
-from drill_sim.ros.parameter_table import specs
+from drill_sim.session.parameter_table import specs
 
 ROOT = Path(__file__).resolve().parents[2]
 

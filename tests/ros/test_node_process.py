@@ -167,7 +167,7 @@ def test_a_stalled_node_still_publishes_every_tick(ros):
 
     from diagnostic_msgs.msg import DiagnosticArray
 
-    from drill_sim.core.pacing import CATCH_UP_TICKS
+    from drill_sim.session.pacing import CATCH_UP_TICKS
     with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/stalled", "-r",
                      "__node:=stalled_rig") as rig:
         stamps_ns: list[int] = []

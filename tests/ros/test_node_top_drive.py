@@ -19,7 +19,7 @@ from geometry_msgs.msg import TwistStamped, WrenchStamped
 from rosutil import NodeProcess, spin_for, wait_for
 from sensor_msgs.msg import JointState
 
-from drill_sim.bag.resim import resimulate
+from drill_sim.session.resim import resimulate
 
 LAG_S, T_MAX_NM, T_MIN_NM = 0.05, 20e3, -15e3
 
@@ -189,7 +189,7 @@ def test_kinematic_mode_refuses_torque_and_follows_joint_velocity_then_switches(
     assert code == 0, out
     assert "dropped a ~/cmd/top_drive_torque command sent before the drive left its mode" in out
     assert out.count("top_drive_mode is kinematic") >= 2, out   # (one refusal a second is logged;
-    # the JointState refusals' texts: tests/core/test_session_top_drive.py)
+    # the JointState refusals' texts: tests/session/test_session_top_drive.py)
 
 
 def test_speed_mode_is_the_drive_pi_on_the_set_point(ros):

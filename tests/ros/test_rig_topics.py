@@ -9,13 +9,14 @@ from pathlib import Path
 
 import pytest
 
-from drill_sim.core import RPM, Rig, RigSample, load_preset, session
+from drill_sim.core import RPM, Rig, RigSample, load_preset
 from drill_sim.core.rig import REGIME_NAMES
 from drill_sim.core.sensors import Measured, exact_measured
+from drill_sim.session import rules
+from drill_sim.session.rig_messages import RigEncoders
 from drill_sim.wire import rig_topics
 from drill_sim.wire.cdr import VECTOR_FIELDS
 from drill_sim.wire.qos import BEST_EFFORT
-from drill_sim.wire.rig_messages import RigEncoders
 from drill_sim.wire.rig_topics import COMMAND, OUTPUT, SERVICE, TOPICS
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -40,10 +41,10 @@ def test_table_entries_are_complete_and_consistent():
         assert (t.source == rig_topics.MEASURED) == t.name.startswith("~/measured/"), t.name
         for f in t.fields:
             assert f.sample in source._fields, f"{t.name}: {f.sample} is not a {source} field"
-        if t.direction == COMMAND and t.command != session.JOINT_COMMANDS:
-            rule = session.COMMANDS[t.command]   # the session's rule reads the field it names
+        if t.direction == COMMAND and t.command != rules.JOINT_COMMANDS:
+            rule = rules.COMMANDS[t.command]   # the session's rule reads the field it names
             assert VECTOR_FIELDS[t.type_name][rule.index] == rule.field, t.name
-    assert set(rig_topics.COMMAND_BY_RULE) == set(session.COMMANDS) | {session.JOINT_COMMANDS}
+    assert set(rig_topics.COMMAND_BY_RULE) == set(rules.COMMANDS) | {rules.JOINT_COMMANDS}
 
 
 def test_joint_fields_of_the_bag_series_agree_with_the_table():

@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 from ...bag.bag import Bag
-from ...core.diagnostics import ERROR, OK, WARN
+from ...session.diagnostics import ERROR, OK, WARN
 from ...wire import WireError, rig_topics
 from ...wire.cdr import decode_diagnostic_array
 from ..errors import UsageError

@@ -9,7 +9,7 @@ import json
 from pathlib import Path
 
 from ...bag.bag import Bag
-from ...bag.resim import ResimResult, resimulate
+from ...session.resim import ResimResult, resimulate
 from ...terminal import Progress
 from . import partial
 

@@ -2,7 +2,7 @@
 statistics for /diagnostics. No ROS here, so the pacing is tested with a fake clock.
 
 Simulated time moves in whole ticks of 1/``rate_hz`` in every mode (the step divides the tick,
-``core.session.step_s``), so every sample is stamped on that grid.
+``session.rules.step_s``), so every sample is stamped on that grid.
 Real-time mode: the ticks due are those the wall clock times ``real_time_factor`` has reached
 since an anchor, rounded to the nearest (the timer's jitter, under a quarter period, never
 moves a tick); the anchor is set again at start, on resume, reset, a rate or factor change,

@@ -7,6 +7,14 @@ the available weight W0 = W_s - H0, or ``hook_load_kn``). With ``ramp: true`` th
 ramp linearly from their previous set point; otherwise they step at ``at_s``. An optional
 ``controller: {law: z_torque, on_at_s: 35.0}`` switches a reference stick-slip controller
 (``drill_sim_controller``) on at that time: before it, the rig's drive runs its own speed loop.
+``changes`` lists run-time parameter changes at simulated times, each a mapping with ``at_s``
+and the rig node's parameters it sets (``{at_s: 4.0, intrinsic_specific_energy_pa: 1.3e8}``:
+a harder formation from 4 s on).
+
+A scenario is played by ``drill_sim_drive`` on the node's clock from outside, or by the rig
+session itself (the node's ``scenario`` parameter): then every set-point, change and switch
+lands on exactly the tick of its simulated time, in real time, at max speed and in lockstep
+alike, and is recorded.
 """
 
 from __future__ import annotations
@@ -16,9 +24,9 @@ from bisect import bisect_right
 from dataclasses import dataclass
 from pathlib import Path
 
-from .parameters import ParameterError, check_number
-from .resources import read_yaml, shipped_names
-from .rig import RPM
+from ..core.parameters import ParameterError, check_number
+from ..core.resources import read_yaml, shipped_names
+from ..core.rig import RPM
 
 _KEYS = {"at_s", "rpm", "top_drive_speed_rad_s", "wob_kn", "hook_load_kn", "ramp"}
 
@@ -50,6 +58,7 @@ class Scenario:
     speed: tuple[_Point, ...]
     load: tuple[_Point, ...]
     controller: ControllerSwitch | None = None
+    changes: tuple[tuple[float, dict[str, object]], ...] = ()   # (at [s], parameters), by time
 
     def commands_at(self, t_s: float, submerged_weight_n: float) -> tuple[float, float]:
         """(top-drive speed [rad/s], hook load [N]) at time ``t_s``; W0 set points use W_s."""
@@ -116,7 +125,26 @@ def scenario_from_dict(name: str, data: object) -> Scenario:
         raise ParameterError(f"scenario {name!r}: initial_state = {initial!r}: expected steady "
                              "or rest")
     return Scenario(name, str(data.get("description", "")), duration, initial, tuple(speed),
-                    tuple(load), _controller(name, data.get("controller"), duration))
+                    tuple(load), _controller(name, data.get("controller"), duration),
+                    _changes(name, data.get("changes", []), duration))
+
+
+def _changes(name: str, raw: object, duration_s: float
+             ) -> tuple[tuple[float, dict[str, object]], ...]:
+    """The scenario's parameter changes, by time (their names and values are checked by the
+    session that plays them, against the node's parameter table)."""
+    if not isinstance(raw, list):
+        raise ParameterError(f"scenario {name!r} changes: expected a list of mappings with "
+                             f"at_s and parameters; got {raw!r}")
+    out = []
+    for i, change in enumerate(raw):
+        where = f"scenario {name!r} change {i}"
+        if not isinstance(change, dict) or "at_s" not in change or len(change) < 2:
+            raise ParameterError(f"{where}: expected a mapping with at_s and one or more "
+                                 f"parameters; got {change!r}")
+        at = check_number(f"{where} at_s", change["at_s"], low_inclusive=True, high=duration_s)
+        out.append((at, {k: v for k, v in change.items() if k != "at_s"}))
+    return tuple(sorted(out, key=lambda c: c[0]))
 
 
 CONTROLLER_LAWS = ("stiff_pi", "soft_speed", "z_torque", "off")
@@ -133,3 +161,18 @@ def _controller(name: str, raw: object, duration_s: float) -> ControllerSwitch |
                              f"{', '.join(CONTROLLER_LAWS)}")
     on = check_number(f"{where} on_at_s", raw["on_at_s"], low_inclusive=True, high=duration_s)
     return ControllerSwitch(str(raw["law"]), on)
+
+
+HOLD = "hold"
+FOREVER_S = 1e9                 # a hold without --duration: until stopped
+
+
+def hold_scenario(rpm: float, wob_kn: float | None, hook_load_kn: float | None,
+                  duration_s: float | None) -> Scenario:
+    """A constant top-drive speed [rpm] and weight on bit W0 [kN] (or hook load H0 [kN]), for
+    ``duration_s`` or until stopped. Raises ParameterError naming a bad value."""
+    load = {"wob_kn": wob_kn} if wob_kn is not None else {"hook_load_kn": hook_load_kn}
+    text = f"hold {rpm:g} rpm, " + (f"{wob_kn:g} kN on bit" if wob_kn is not None
+                                    else f"{hook_load_kn:g} kN hook load")
+    return scenario_from_dict(HOLD, {"description": text, "duration_s": duration_s or FOREVER_S,
+                                     "points": [{"at_s": 0.0, "rpm": rpm, **load}]})

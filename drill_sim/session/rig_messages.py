@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from . import cdr, rig_topics
+from ..wire import cdr, rig_topics
 
 if TYPE_CHECKING:
     from ..core.rig import RigSample

@@ -8,11 +8,11 @@ from __future__ import annotations
 import pytest
 
 from drill_sim.core import load_preset
-from drill_sim.core.diagnostics import OK, WARN, rig_status
-from drill_sim.core.lockstep import Lockstep
-from drill_sim.core.pacing import TickStats
 from drill_sim.core.rig import Rig
-from drill_sim.ros.parameter_table import specs
+from drill_sim.session.diagnostics import OK, WARN, rig_status
+from drill_sim.session.lockstep import Lockstep
+from drill_sim.session.pacing import TickStats
+from drill_sim.session.parameter_table import specs
 from drill_sim.wire import rig_topics
 
 TOP, HOOK = "~/cmd/top_drive", "~/cmd/hook_load"

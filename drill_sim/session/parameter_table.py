@@ -18,6 +18,7 @@ from ..core.top_drive import MODES as TOP_DRIVE_MODES
 from ..wire import rig_topics
 
 MIB = 1 << 20
+PERTURBATION_RANGE = (-0.9, 1.0)   # relative perturbation of the steady start's bit speed
 BOOL, INT, FLOAT, STR, NAMES = bool, int, float, str, list
 # the command topics a lockstep tick can wait for, as lockstep_topics names them
 LOCKSTEP_CHOICES = tuple(t.name[2:] for t in rig_topics.COMMANDS)
@@ -173,6 +174,15 @@ def specs(preset: Preset) -> list[Spec]:
              choices=LOCKSTEP_CHOICES),
         Spec("lockstep_timeout_s", 1.0, "a lockstep tick waiting longer than this warns and "
              "is published again (the rig keeps waiting)", "s", 0.01, 3600.0),
+        Spec("scenario", "", "a driller scenario the rig plays itself on its simulated clock "
+             "(a shipped name or a YAML file, msg_docs/driver.md): its set-points, parameter "
+             "changes and controller switch land on exactly the tick of their time and are "
+             "recorded; empty: none",
+             read_only="the scenario starts with the session; " + START_ONLY),
+        Spec("scenario_controller", "drill_sim_controller", "the controller node a "
+             "scenario's controller switch asks (its law and enabled parameters; in lockstep "
+             "the tick waits until it confirms)",
+             read_only="the switch's client is made at start; " + START_ONLY),
         Spec("start_paused", False, "start paused: nothing is published until ~/pause false, "
              "so a controller can connect before the first tick",
              read_only="it applies at start only"),
@@ -203,6 +213,11 @@ def specs(preset: Preset) -> list[Spec]:
         Spec("initial_weight_on_bit_n", 1e3 * preset.weight_on_bit_kn,
              "available weight W0 = W_s - H0 at start and after reset", "N", 0.0, 1e6,
              "bits rarely take more than ~450 kN; never more than W_s"),
+        Spec("initial_perturbation", 0.0, "with initial_state steady: the bit speed starts "
+             "at (1 + this) times the steady speed, so stick-slip can grow from the start "
+             "where the steady state is unstable (0: exactly steady; the offline "
+             "drill_sim control starts at 1e-3)", "", *PERTURBATION_RANGE,
+             "a bit speed between 0.1 and 2 times the steady one"),
         Spec("initial_gap_m", 0.05, "with initial_state rest: bit height above bottom", "m",
              0.0, 30.0, "within a stand (~28 m) of bottom"),
         Spec("max_top_drive_speed_rad_s", 30.0, "top-drive commands above this are refused",
@@ -288,3 +303,29 @@ def cross_refusal(values: dict[str, object]) -> str | None:
                 f"submerged_weight_n = {values['submerged_weight_n']:g} N: the string cannot "
                 "put more than its own weight on the bit")
     return None
+
+
+def checked_change(by_name: dict[str, Spec], old: dict[str, object],
+                   changes: dict[str, object]) -> dict[str, object]:
+    """The parameters ``old`` with ``changes`` made, checked against the table: each a
+    parameter that may change at run time, in its type and range, and the cross-checks hold.
+    Raises ParameterError naming the first that is not, with what is expected."""
+    import difflib
+
+    from ..core.parameters import ParameterError
+    new = dict(old)
+    for name, value in changes.items():
+        spec = by_name.get(name)
+        if spec is None:
+            near = difflib.get_close_matches(name, list(by_name), n=1)
+            raise ParameterError(f"{name}: no such parameter" + (
+                f"; did you mean {near[0]}?" if near else "; expected a parameter of the "
+                "node (msg_docs/node.md)"))
+        if spec.read_only:
+            raise ParameterError(f"{name} cannot change at run time: {spec.read_only}")
+        new[name], refusal = spec.check(value)
+        if refusal is not None:
+            raise ParameterError(refusal)
+    if (refusal := cross_refusal(new)) is not None:
+        raise ParameterError(refusal)
+    return new

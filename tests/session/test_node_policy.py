@@ -9,8 +9,9 @@ import random
 
 import pytest
 
-from drill_sim.core import RPM, Rig, load_preset, session
-from drill_sim.core.diagnostics import (
+from drill_sim.core import RPM, Rig, load_preset
+from drill_sim.session import rules
+from drill_sim.session.diagnostics import (
     ERROR,
     OK,
     WARN,
@@ -18,8 +19,8 @@ from drill_sim.core.diagnostics import (
     drilling_regime,
     rig_status,
 )
-from drill_sim.core.pacing import CATCH_UP_TICKS, Pacer, TickStats
-from drill_sim.ros.parameter_table import specs
+from drill_sim.session.pacing import CATCH_UP_TICKS, Pacer, TickStats
+from drill_sim.session.parameter_table import specs
 
 
 class FakeClock:
@@ -253,16 +254,16 @@ def test_the_step_divides_the_tick():
     for rate_hz, dt_s, steps in ((1000.0, 1.05e-4, 10), (100.0, 1.05e-4, 96),
                                  (5000.0, 1.05e-4, 2), (1000.0, 1e-4, 10), (1000.0, 5e-3, 1)):
         p = {"rate_hz": rate_hz, "dt_s": dt_s}
-        step = session.step_s(p)
+        step = rules.step_s(p)
         assert step <= dt_s and steps * step == pytest.approx(1.0 / rate_hz, rel=1e-15)
         assert round(1.0 / (rate_hz * step)) == steps
-    rig = session.make_rig({**{s.name: s.default for s in specs(load_preset("base"))},
+    rig = rules.make_rig({**{s.name: s.default for s in specs(load_preset("base"))},
                             "rate_hz": 1000.0})
     for k in range(1, 4):
         rig.advance_steps(10)
         assert round(rig.time_s * 1e9) == k * 1_000_000   # exactly 1 ms a tick, in ns
-    assert session.tick_refusal(500.0, 1e-4) is None and session.tick_refusal(2000.0, 1e-4) is None
-    assert "whole number of the session's step" in session.tick_refusal(3000.0, 1e-4)
+    assert rules.tick_refusal(500.0, 1e-4) is None and rules.tick_refusal(2000.0, 1e-4) is None
+    assert "whole number of the session's step" in rules.tick_refusal(3000.0, 1e-4)
 
 
 def test_tick_statistics_over_a_window():
@@ -306,29 +307,29 @@ def test_command_rule_takes_its_field_and_limit():
     rig = Rig(preset.rig)
     rig.start_at_rest(0.0)
     six = (0.0, 0.0, 2e5, 0.0, 0.0, 7.0)
-    assert session.apply_command(rig, p, "top_drive", "top_drive", six) is None
+    assert rules.apply_command(rig, p, "top_drive", "top_drive", six) is None
     assert (rig.commanded_speed_rad_s, rig.commanded_hook_load_n) == (7.0, preset.rig
                                                                       .submerged_weight_n)
-    assert session.apply_command(rig, p, "hook_load", "", six) is None
+    assert rules.apply_command(rig, p, "hook_load", "", six) is None
     assert (rig.commanded_speed_rad_s, rig.commanded_hook_load_n) == (7.0, 2e5)
-    refused = session.apply_command(rig, p, "top_drive", "bit", six)
+    refused = rules.apply_command(rig, p, "top_drive", "bit", six)
     assert refused == ("top-drive speed twist.angular.z frame_id", "bit", "'top_drive' or empty")
     too_fast = (0.0, 0.0, 0.0, 0.0, 0.0, 31.0)
-    what, value, expected = session.apply_command(rig, p, "top_drive", "", too_fast)
+    what, value, expected = rules.apply_command(rig, p, "top_drive", "", too_fast)
     assert (what, value) == ("top-drive speed twist.angular.z [rad/s]", 31.0)
     assert "[0, 30] rad/s" in expected
-    assert session.apply_command(rig, p, "hook_load", "", (0.0, 0.0, math.nan) + (0.0,) * 3)
+    assert rules.apply_command(rig, p, "hook_load", "", (0.0, 0.0, math.nan) + (0.0,) * 3)
     assert (rig.commanded_speed_rad_s, rig.commanded_hook_load_n) == (7.0, 2e5)  # held
 
 
 def test_the_steady_start_turns_into_stick_slip_as_node_md_says():
-    """The node's steady start (session.start: no perturbation) on base at 60 rpm and 100 kN:
+    """The node's steady start (rules.start: no perturbation) on base at 60 rpm and 100 kN:
     round-off grows into a first stick after ~12 s, then a 1.57 s stick-slip cycle."""
     preset = load_preset("base")
     p = {"initial_top_drive_speed_rad_s": 60 * RPM, "initial_weight_on_bit_n": 100e3,
          "initial_state": "steady"}
     rig = Rig(preset.rig)
-    session.start(rig, p)
+    rules.start(rig, p)
     onsets, was_stuck, k = [], False, 0
     while len(onsets) < 4:
         k += 1

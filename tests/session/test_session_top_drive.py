@@ -8,8 +8,9 @@ import math
 
 import pytest
 
-from drill_sim.core import ParameterError, load_preset, session
-from drill_sim.ros.parameter_table import specs
+from drill_sim.core import ParameterError, load_preset
+from drill_sim.session import rules
+from drill_sim.session.parameter_table import specs
 from drill_sim.wire.cdr import JointCommand
 
 
@@ -21,8 +22,8 @@ def _params(**changes) -> dict[str, object]:
 
 def _rig(**changes):
     p = _params(**changes)
-    rig = session.make_rig(p)
-    session.start(rig, p)
+    rig = rules.make_rig(p)
+    rules.start(rig, p)
     return rig, p
 
 
@@ -37,21 +38,21 @@ def test_parameters_make_the_preset_top_drive_with_zero_as_no_rate_limit():
     assert rig.top_drive.drive_kp_nm_s_rad == preset.drive_kp_nm_s_rad
     assert rig.top_drive.top_drive_mode == "torque"
     # a session recorded before the top drive's parameters: the seed's kinematic drive
-    old = {k: v for k, v in p.items() if k not in session.TOP_DRIVE_FIELDS}
-    assert session.top_drive_parameters(old).top_drive_mode == "kinematic"
+    old = {k: v for k, v in p.items() if k not in rules.TOP_DRIVE_FIELDS}
+    assert rules.top_drive_parameters(old).top_drive_mode == "kinematic"
 
 
 def test_torque_command_only_in_torque_mode_and_finite():
     rig, p = _rig()
-    what, _, expected = session.apply_command(rig, p, "top_drive_torque", "",
+    what, _, expected = rules.apply_command(rig, p, "top_drive_torque", "",
                                                   _torque(5e3))
     assert "top_drive_mode is kinematic" in what and "top_drive_mode = torque" in expected
     rig, p = _rig(top_drive_mode="torque")
     held = rig.commanded_motor_torque_nm
     for bad in (math.nan, math.inf, -2e6):
-        assert session.apply_command(rig, p, "top_drive_torque", "", _torque(bad)) is not None
+        assert rules.apply_command(rig, p, "top_drive_torque", "", _torque(bad)) is not None
         assert rig.commanded_motor_torque_nm == held
-    assert session.apply_command(rig, p, "top_drive_torque", "top_drive", _torque(-5e3)) is None
+    assert rules.apply_command(rig, p, "top_drive_torque", "top_drive", _torque(-5e3)) is None
     assert rig.commanded_motor_torque_nm == -5e3           # braking torques are commands too
 
 
@@ -69,7 +70,7 @@ def test_a_bad_joint_command_is_refused_whole(cmd, fragment):
     rig, p = _rig(top_drive_mode="torque")
     before = (rig.commanded_speed_rad_s, rig.commanded_hook_load_n,
               rig.commanded_motor_torque_nm)
-    refusal = session.apply_command(rig, p, session.JOINT_COMMANDS, "", cmd)
+    refusal = rules.apply_command(rig, p, rules.JOINT_COMMANDS, "", cmd)
     assert refusal is not None and fragment in " ".join(map(str, refusal)), refusal
     assert (rig.commanded_speed_rad_s, rig.commanded_hook_load_n,
             rig.commanded_motor_torque_nm) == before
@@ -78,10 +79,10 @@ def test_a_bad_joint_command_is_refused_whole(cmd, fragment):
 def test_a_joint_command_sets_speed_torque_and_hook_load():
     rig, p = _rig(top_drive_mode="torque")
     cmd = JointCommand(("hook", "top_drive"), (), (), (250e3, 7e3))
-    assert session.apply_command(rig, p, session.JOINT_COMMANDS, "", cmd) is None
+    assert rules.apply_command(rig, p, rules.JOINT_COMMANDS, "", cmd) is None
     assert (rig.commanded_hook_load_n, rig.commanded_motor_torque_nm) == (250e3, 7e3)
     cmd = JointCommand(("top_drive",), (), (4.0,), ())
-    assert session.apply_command(rig, p, session.JOINT_COMMANDS, "", cmd) is None
+    assert rules.apply_command(rig, p, rules.JOINT_COMMANDS, "", cmd) is None
     assert rig.commanded_speed_rad_s == 4.0
 
 
@@ -90,10 +91,10 @@ def test_a_mode_switch_at_run_time_is_bumpless_and_a_bad_change_leaves_the_rig()
     rig.advance(1.0)
     torque = rig.sample().surface_torque_nm
     new = dict(p, top_drive_mode="torque")
-    assert session.apply_changes(rig, p, new) == {"top_drive_mode"}
+    assert rules.apply_changes(rig, p, new) == {"top_drive_mode"}
     assert rig.commanded_motor_torque_nm == pytest.approx(torque, rel=1e-12)
     assert rig.sample().motor_torque_nm == pytest.approx(torque, rel=1e-12)
     # a change refused by the rig's parameters takes the top drive's change back with it
     with pytest.raises(ParameterError, match="blade_count"):
-        session.apply_changes(rig, new, dict(new, top_drive_mode="speed", blade_count=5))
+        rules.apply_changes(rig, new, dict(new, top_drive_mode="speed", blade_count=5))
     assert rig.top_drive.top_drive_mode == "torque"

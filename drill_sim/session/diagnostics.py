@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..core.rig import RigSample
 from .lockstep import LockstepStatus
 from .pacing import CATCH_UP_TICKS, TickStats, each_sampled
-from .rig import RigSample
 
 OK, WARN, ERROR = 0, 1, 2      # the levels of diagnostic_msgs/DiagnosticStatus
 SLOW_TICKS = 0.9               # warn below this fraction of rate_hz (once ticks overran)

@@ -2,7 +2,7 @@
 
 The node records its parameters (MCAP metadata), every command it received, its resets and
 run-time parameter changes (``<node>/events``) and every sample it published, in the order they
-happened. The re-run starts the same rig (``core.session``), then walks the bag in that order:
+happened. The re-run runs the same ``RigSession`` the node ran, then walks the bag in that order:
 each command is accepted or refused by the node's rules, each event is redone, and before each
 recorded joint_states sample the model is advanced to that sample's step and compared with it.
 The sensors (``core.sensors``, the recorded profile and seed) measure each re-run sample as the
@@ -22,14 +22,15 @@ from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
-from ..core import NoSteadyDrilling, ParameterError, session
-from ..core.rig import Rig
+from ..bag.bag import Bag, opened
+from ..bag.errors import BagError
+from ..bag.series import JOINT_ARRAY_START, JOINT_FIELDS, JOINT_VALUES_F64, joint_state_layout
+from ..core import NoSteadyDrilling, ParameterError
 from ..core.sensor_profile import profile_from_dict
-from ..core.sensors import Measured, SensorBank, session_sensors
+from ..core.sensors import Measured
 from ..wire import cdr, rig_topics
-from .bag import Bag, opened
-from .errors import BagError
-from .series import JOINT_ARRAY_START, JOINT_FIELDS, JOINT_VALUES_F64, joint_state_layout
+from . import rules
+from .rig_session import RigSession
 
 _STAMP = struct.Struct("<iI")
 MOTOR_TORQUE = "motor_torque_nm"            # compared from ~/top_drive/motor_wrench when recorded
@@ -99,7 +100,7 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
     if "parameters" not in meta or "node" not in meta.get("session", {}):
         raise BagError(f"bag {bag.path}: no drill_sim session metadata (parameters, session); "
                        "resim re-runs sessions the rig node recorded itself")
-    p = {k: session.parse_value(v) for k, v in meta["parameters"].items()}
+    p = {k: rules.parse_value(v) for k, v in meta["parameters"].items()}
     node = meta["session"]["node"]
     epoch_ns = int(meta["session"].get("stamp_epoch_ns", "0"))
     topics = {"joints": rig_topics.JOINT_STATES.under(node),
@@ -110,21 +111,21 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
                          meta["session"].get("preset", "?"))
     try:
         # the step the node used; bags from before it was recorded ran at dt_s itself
-        geometry = session.geometry_from_record(meta["string"]) if "string" in meta else None
-        rig = session.make_rig(p, float(meta["session"].get("step_s", p["dt_s"])), geometry)
-        session.start(rig, p)
+        geometry = rules.geometry_from_record(meta["string"]) if "string" in meta else None
         recorded = meta.get("sensors", {})
-        sensors = session_sensors(p, rig.dt_s, profile_from_dict(
-            recorded.get("name", "recorded"), json.loads(recorded["profile"]))
-            if "profile" in recorded else None)
+        profile = profile_from_dict(recorded.get("name", "recorded"),
+                                    json.loads(recorded["profile"])) \
+            if "profile" in recorded else None
+        session = RigSession(p, geometry=geometry, sensor_profile=profile, record=False,
+                             step_s=float(meta["session"].get("step_s", p["dt_s"])))
     except (ParameterError, NoSteadyDrilling, KeyError, ValueError) as exc:
         raise BagError(f"bag {bag.path}: the recorded parameters do not make a rig: {exc}") \
             from None
-    run = _Rerun(rig, p, epoch_ns, result, sensors)
+    run = _Rerun(session, epoch_ns, result)
     total = max(found.topics[topics["joints"]].count, 1)
     handlers = {topics["joints"]: run.sample, topics["events"]: run.event,
                 rig_topics.topic("~/top_drive/motor_wrench").under(node): run.motor}
-    handlers.update({t.under(node): partial(run.command, t.command) for t in rig_topics.COMMANDS})
+    handlers.update({t.under(node): partial(run.command, t) for t in rig_topics.COMMANDS})
     handlers.update({t.under(node): partial(run.measured, t)
                      for t in rig_topics.MEASURED_OUTPUTS if t.under(node) in found.topics})
     walked: list[str] = []
@@ -140,14 +141,11 @@ def _resimulate(bag: Bag, progress: Callable[[float], None] | None) -> ResimResu
 
 
 class _Rerun:
-    """The rig being re-run and the session state the node kept beside it."""
+    """The recorded session walked through a ``RigSession``: the object the node ran."""
 
-    def __init__(self, rig: Rig, p: dict, epoch_ns: int, result: ResimResult,
-                 sensors: SensorBank) -> None:
-        self.rig, self.p, self.epoch_ns, self.result = rig, p, epoch_ns, result
-        self.sensors = sensors
+    def __init__(self, session: RigSession, epoch_ns: int, result: ResimResult) -> None:
+        self.session, self.rig, self.epoch_ns, self.result = session, session.rig, epoch_ns, result
         self.reading: Measured | None = None     # the sensors' reading of the last sample
-        self.offset_s = 0.0                      # simulated time before the last reset
         self.values_at: int | None = None        # byte offset of the joint arrays
         self.types = {t.command: t.type_name for t in rig_topics.COMMANDS}
 
@@ -155,7 +153,7 @@ class _Rerun:
         """To the step of a recorded output's stamp; its simulated time [s]."""
         sec, nsec = _STAMP.unpack_from(data, 4)
         sim_time_s = (sec * 1_000_000_000 + nsec - self.epoch_ns) * 1e-9
-        step = round((sim_time_s - self.offset_s) / self.rig.dt_s)
+        step = round((sim_time_s - self.session.offset_s) / self.rig.dt_s)
         ahead = step - self.rig.steps
         if ahead > 0:
             self.rig.advance_steps(ahead)
@@ -170,7 +168,7 @@ class _Rerun:
         for name, (kind, j) in JOINT_FIELDS.items():
             self._compare(name, getattr(s, name), recorded[JOINT_ARRAY_START[kind] + j],
                           sim_time_s)
-        self.reading = self.sensors.measure(self.rig.time_s, s)
+        self.reading = self.session.sensors.measure(self.rig.time_s, s)
         self.result.samples += 1
 
     def motor(self, data: bytes) -> None:
@@ -187,7 +185,7 @@ class _Rerun:
         for f in t.fields:
             rerun = getattr(self.reading, f.sample) if self.reading is not None else math.nan
             self._compare(f"measured {f.sample}", rerun, values.get(f.message, math.nan),
-                          self.offset_s + self.rig.time_s)
+                          self.session.sim_time_s)
 
     def _compare(self, name: str, rerun: float, recorded: float, t: float) -> None:
         r = self.result
@@ -197,10 +195,10 @@ class _Rerun:
             if r.max_difference[name] > r.worst[1]:
                 r.worst = (name, r.max_difference[name], t)
 
-    def command(self, name: str, data: bytes) -> None:
-        """A recorded command, accepted or refused by the node's own rule."""
-        frame, _, _, six = cdr.decode_command(self.types[name], data)
-        if session.apply_command(self.rig, self.p, name, frame, six) is None:
+    def command(self, topic: rig_topics.RigTopic, data: bytes) -> None:
+        """A recorded command, accepted or refused by the session's own rule."""
+        frame, _, _, six = cdr.decode_command(topic.type_name, data)
+        if self.session.command(topic, frame, six) is None:
             self.result.commands += 1
         else:
             self.result.refused += 1
@@ -210,14 +208,11 @@ class _Rerun:
         event = json.loads(data[8:8 + n - 1].decode("utf-8"))
         kind = event.get("event")
         if kind == "reset":
-            self.offset_s += self.rig.time_s
-            session.start(self.rig, self.p)
-            self.sensors.reset()
+            self.session.reset(None)
         elif kind == "parameters":
-            new = dict(self.p)
-            new.update({k: session.parse_value(v) for k, v in event["values"].items()})
-            session.apply_changes(self.rig, self.p, new)
-            self.p = new
+            new = dict(self.session.p)
+            new.update({k: rules.parse_value(v) for k, v in event["values"].items()})
+            self.session.change(new)
         self.result.events.append(kind)
 
 

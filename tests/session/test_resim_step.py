@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 from sessionutil import session_bag
 
-from drill_sim.bag.resim import resimulate
+from drill_sim.session.resim import resimulate
 
 
 @pytest.mark.parametrize("recorded_step", [True, False])

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from drill_sim.core import RPM, ParameterError
-from drill_sim.core.scenario import load_scenario, scenario_from_dict, scenario_names
+from drill_sim.session.scenario import load_scenario, scenario_from_dict, scenario_names
 
 
 def test_shipped_scenarios():

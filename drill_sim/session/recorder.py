@@ -21,11 +21,12 @@ from pathlib import Path
 
 from .. import __version__
 from ..bag.writer import BagError, BagWriter
+from ..core.figures import key_figures
 from ..core.rig import Rig
 from ..core.sensor_profile import SensorProfile
-from ..core.session import geometry_record, key_figures
 from ..wire import WireError, cdr, rig_topics
 from ..wire.rig_topics import RigTopic
+from .rules import geometry_record
 
 
 class RecordRefused(Exception):

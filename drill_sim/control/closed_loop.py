@@ -1,0 +1,228 @@
+"""The offline closed loop: a ``RigSession`` (the object the rig node runs) ticked at the
+controller's sample period h, a law under the ``Supervisor`` on the session's sensor readings,
+and the metrics that score it (msg_docs/control.md, "Evaluation").
+
+The session runs at ``rate_hz = 1/h`` with the node's rules: its step is the largest divisor of
+h not above the default step (100 µs at 1 kHz on base), so the samples fall exactly on k·h as
+the node's ticks do; its sensors measure each tick's sample (ideal by default); the law's
+output goes in as the node's commands do (``~/cmd/top_drive_torque``, or ``~/cmd/top_drive``
+for the kinematic drive) and is held until the next sample (zero-order hold). So the same law
+at the same h gives the same numbers here and through the nodes in lockstep, and a loop
+recorded here (``record``) is a bag ``drill_sim bag resim`` re-runs exactly.
+
+Torque laws drive a top drive in ``torque`` mode (inertia, limits, rate and lag as given);
+``kinematic`` drives the seed's ideal speed source. The session starts on the steady state at
+the scenario's first set-point, perturbed by ``LoopSettings.perturbation`` (the session's
+``initial_perturbation``) so stick-slip grows where it can; the law (before a switch-on, the
+drive's own stiff speed loop) takes over bumplessly from the torque the drive holds.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ..core import RPM, Preset, RigSample, load_preset
+from ..core.parameters import ParameterError, check_number
+from ..core.sensors import Measured
+from ..session import rules
+from ..session.parameter_table import specs
+from ..session.rig_session import RigSession
+from ..wire import cdr, rig_topics
+from .evaluation import (
+    LoopResult,
+    LoopSettings,
+    Scenario,
+    ideal_measurement,
+    law_top_drive,
+    loop_result,
+)
+from .laws import SurfaceMeasurement
+from .supervisor import Supervisor
+from .tuning import pipe_impedance
+
+SPEED = rig_topics.COMMAND_BY_RULE["top_drive"]
+HOOK = rig_topics.COMMAND_BY_RULE["hook_load"]
+TORQUE = rig_topics.COMMAND_BY_RULE["top_drive_torque"]
+SERIES = ("time_s", "bit_speed_rad_s", "top_drive_speed_rad_s", "surface_torque_nm",
+          "motor_torque_nm", "law_output", "stuck", "bit_depth_m", "top_drive_angle_rad",
+          "wob_n")
+
+
+def session_parameters(preset: Preset, scenario: Scenario, settings: LoopSettings,
+                       record: Path | None = None) -> dict[str, object]:
+    """The rig session's parameters for this loop: the node's table at the preset's
+    defaults, ticking at 1/h with /clock, the law's drive, the settings' string and sensors,
+    a steady start at the scenario's first set-point."""
+    h = check_number("sample_period_s", settings.sample_period_s, high=1.0)
+    drive = law_top_drive(preset, settings.law, settings.top_drive)
+    speed_set, wob_kn = scenario.values(np.zeros(1))
+    start = speed_set[0] if scenario.start_rpm is None else check_number(
+        "start_rpm", scenario.start_rpm) * RPM
+    p = {s.name: s.default for s in specs(preset)}
+    p.update(publish_clock=True, max_speed=True, rate_hz=1.0 / h,
+             string_model=settings.string_model, sensor_profile=settings.sensor_profile,
+             sensor_seed=settings.sensor_seed, initial_state="steady",
+             initial_top_drive_speed_rad_s=float(start),
+             initial_weight_on_bit_n=float(1e3 * wob_kn[0]),
+             initial_perturbation=settings.perturbation, record=str(record or ""),
+             max_top_drive_speed_rad_s=max(p["max_top_drive_speed_rad_s"], 40.0))
+    for name in rules.TOP_DRIVE_FIELDS:
+        value = getattr(drive, name)
+        p[name] = 0.0 if name == "motor_torque_rate_nm_s" and math.isinf(value) else value
+    return p
+
+
+def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *,
+             progress: Callable[[float], None] | None = None,
+             record: str | Path | None = None) -> LoopResult:
+    """Close the loop over the scenario (module docstring); ``record``: a new bag directory
+    the session is recorded into, as the node records it."""
+    preset = load_preset(preset) if isinstance(preset, str) else preset
+    h = check_number("sample_period_s", settings.sample_period_s, high=1.0)
+    drive = law_top_drive(preset, settings.law, settings.top_drive)
+    n = math.floor(scenario.duration_s / h + 1e-9)
+    times = np.arange(n + 1) * h
+    speed_set, wob_kn = scenario.values(times)
+    hook = preset.rig.submerged_weight_n - 1e3 * wob_kn
+    if np.any(hook < 0.0):
+        raise ParameterError(f"wob_kn up to {wob_kn.max():g} kN is out of range: expected at "
+                             f"most W_s = {preset.rig.submerged_weight_n / 1e3:g} kN")
+    p = session_parameters(preset, scenario, settings, Path(record) if record else None)
+    session = RigSession(p, geometry=preset.string, preset=preset.name)
+    session.set_live([False] * len(session.outputs))   # nobody subscribes offline
+    commands = _Commands(session)
+    try:
+        series = _close(session, commands, preset, scenario, settings, drive, h, n,
+                        speed_set, hook, progress)
+    finally:
+        session.close()
+    window_k = max(1, math.ceil(scenario.window_start_s / h - 1e-9))
+    return loop_result(preset, scenario, settings, drive, session.rig, series, window_k)
+
+
+def _close(session: RigSession, commands: _Commands, preset: Preset, scenario: Scenario,
+           settings: LoopSettings, drive, h: float, n: int, speed_set: np.ndarray,
+           hook: np.ndarray, progress: Callable[[float], None] | None
+           ) -> dict[str, np.ndarray]:
+    rig = session.rig
+    measure = _measure(settings)
+    gains = dict(settings.gains)
+    if settings.law not in ("kinematic", "off"):
+        gains.setdefault("torque_min_nm", drive.motor_torque_min_nm)
+        gains.setdefault("torque_max_nm", drive.motor_torque_max_nm)
+    z, j = pipe_impedance(preset), drive.top_drive_inertia_kg_m2
+    speed_law = settings.law == "kinematic"
+    switch_k = 0 if speed_law else math.ceil(scenario.switch_on_s / h - 1e-9)
+    session.emit(())                                  # the sample at t = 0, measured
+    sample, reading = session.last[1], session.last[2]
+    if speed_law:
+        from . import make_law
+        law = make_law("kinematic", h, z, j, **gains)
+        law.reset(float(speed_set[0]))
+        output = law.bumpless_start(rig.commanded_speed_rad_s, measure(sample, reading))
+    else:
+        first, first_gains = (settings.law, gains) if switch_k == 0 else (
+            "stiff_pi", {"torque_min_nm": drive.motor_torque_min_nm,
+                         "torque_max_nm": drive.motor_torque_max_nm})
+        sup = Supervisor(h, z, j, first, first_gains, speed_set_rad_s=float(speed_set[0]))
+        sup.last_output = rig.commanded_motor_torque_nm   # take over from what the drive holds
+        output = sup.step(measure(sample, reading))
+    series = {k: np.empty(n + 1) for k in SERIES}
+    _record(series, 0, sample, output)
+    window_k = max(1, math.ceil(scenario.window_start_s / h - 1e-9))
+    every = max(1, n // 200)
+    for k in range(1, n + 1):
+        if speed_law:
+            commands.send(float(output), float(hook[k - 1]))
+        else:
+            commands.send(float(speed_set[k - 1]), float(hook[k - 1]), float(output))
+        session.tick()
+        if k == window_k:
+            rig.reset_metrics_window()
+        sample, reading = session.last[1], session.last[2]
+        m = measure(sample, reading)
+        if speed_law:
+            law.set_speed(float(speed_set[k]))
+            output = law.step(m)
+        else:
+            if k == switch_k:
+                sup.replace_law(settings.law, gains)      # bumpless: from the last output
+            sup.set_speed(float(speed_set[k]))
+            output = sup.step(m)
+        _record(series, k, sample, output)
+        if progress is not None and k % every == 0:
+            progress(k / n)
+    return series
+
+
+def _measure(settings: LoopSettings) -> Callable[[RigSample, Measured], SurfaceMeasurement]:
+    """What the law reads of a tick: a custom sensor's view of the sample, the ideal sensor's
+    (the sample itself), or the session's sensors' reading."""
+    if settings.measure is not None:
+        custom = settings.measure
+        return lambda sample, reading: custom(sample)
+    if settings.sensor_profile == "ideal":
+        return lambda sample, reading: ideal_measurement(sample)
+    return lambda sample, m: SurfaceMeasurement(sample.time_s, m.top_drive_speed_rad_s,
+                                                m.motor_torque_nm, m.surface_torque_nm)
+
+
+class _Commands:
+    """The loop's commands into the session as the node takes them, each sent when its value
+    changes (the session holds it meanwhile); as CDR bytes when the session records (so the
+    bag holds them as a node's does), else as values."""
+
+    def __init__(self, session: RigSession) -> None:
+        self.session = session
+        self.encode = cdr.stamped_vectors(rig_topics.FRAME_TOP_DRIVE)
+        self.held: list[float | None] = [None, None, None]      # speed, hook, torque
+
+    def send(self, speed: float, hook: float, torque: float | None = None) -> None:
+        held = self.held
+        if speed != held[0]:
+            held[0] = speed
+            self._one(SPEED, (0.0, 0.0, 0.0, 0.0, 0.0, speed))
+        if hook != held[1]:
+            held[1] = hook
+            self._one(HOOK, (0.0, 0.0, hook, 0.0, 0.0, 0.0))
+        if torque is not None and torque != held[2]:
+            held[2] = torque
+            self._one(TORQUE, (0.0, 0.0, 0.0, 0.0, 0.0, torque))
+
+    def _one(self, topic: rig_topics.RigTopic, six: tuple[float, ...]) -> None:
+        s = self.session
+        if s.recorder is not None:
+            sec, nsec = divmod(s.stamp_ns(), 1_000_000_000)
+            refusal = s.receive(topic, self.encode(sec, nsec, six))
+        else:
+            refusal = s.command(topic, rig_topics.FRAME_TOP_DRIVE, six)
+        if refusal is not None:
+            raise ParameterError(f"the loop's {topic.name} command was refused: {refusal}")
+
+
+def _record(series: dict[str, np.ndarray], k: int, s: RigSample, output: float) -> None:
+    series["time_s"][k] = s.time_s
+    series["bit_speed_rad_s"][k] = s.bit_speed_rad_s
+    series["top_drive_speed_rad_s"][k] = s.top_drive_speed_rad_s
+    series["surface_torque_nm"][k] = s.surface_torque_nm
+    series["motor_torque_nm"][k] = s.motor_torque_nm
+    series["law_output"][k] = output
+    series["stuck"][k] = s.stuck
+    series["bit_depth_m"][k] = s.bit_depth_m
+    series["top_drive_angle_rad"][k] = s.top_drive_angle_rad
+    series["wob_n"][k] = s.wob_n
+
+
+def run_laws(preset: Preset | str, scenario: Scenario, laws: Sequence[str],
+             base: LoopSettings | None = None, *,
+             gains: Mapping[str, Mapping[str, float]] | None = None) -> list[LoopResult]:
+    """Each law in turn on the same scenario and settings (gains per law name)."""
+    base = base or LoopSettings(law="kinematic")
+    gains = gains or {}
+    return [run_loop(preset, scenario, replace(base, law=name, gains=gains.get(name, {})))
+            for name in laws]

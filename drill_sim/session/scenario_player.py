@@ -1,0 +1,101 @@
+"""A driller scenario played by the rig session itself, on its simulated clock: set-points,
+parameter changes and a controller switch at exactly the tick of their time, in real time, at
+max speed and in lockstep alike, each recorded as it lands (set-points as the commands a
+driver would have sent, changes as parameter events, the switch as a controller event), so
+``drill_sim bag resim`` redoes them."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from ..core import ParameterError
+from ..wire import cdr, rig_topics
+from .scenario import Scenario
+
+_SPEED = rig_topics.COMMAND_BY_RULE["top_drive"]
+_HOOK = rig_topics.COMMAND_BY_RULE["hook_load"]
+_ENCODE = cdr.stamped_vectors(rig_topics.FRAME_TOP_DRIVE)
+
+
+class ScenarioPlayer:
+    """A scenario played on a ``RigSession`` (``session``) from the session's time at its
+    start."""
+
+    def __init__(self, session: Any, scenario: Scenario,
+                 on_switch: Callable[[str], object] | None = None,
+                 check: Callable[[dict[str, object], dict[str, object]], dict[str, object]]
+                 | None = None) -> None:
+        """Play ``scenario`` from now on, on the session's simulated clock: at each tick, once
+        the rig has reached its time t, the scenario's parameter changes due by t are made
+        (``change``, recorded), its controller switch due by t is asked for
+        (``on_switch(law)``, recorded; what it returns, a confirmation with ``done()``, is
+        held in ``switch_pending`` and a lockstep loop holds the tick's sample until it is
+        done), and its set-points for t go in as commands (recorded as received), held until
+        the next tick. ``check``: the session's parameters after a change, checked (raises
+        ParameterError naming a bad one): ``check(old, changes)``, the parameters after the
+        changes; every change is checked here, before anything runs.
+        A reset plays the scenario again from its start."""
+        self.session = session
+        if check is not None:
+            values = dict(session.p)
+            for at_s, change in scenario.changes:
+                try:
+                    values = check(values, change)
+                except ParameterError as exc:
+                    raise ParameterError(f"scenario '{scenario.name}' change at {at_s:g} s: "
+                                         f"{exc}") from None
+        self.scenario, self._on_switch = scenario, on_switch
+        self._check = check
+        self.restart()
+
+    def restart(self) -> None:
+        """From the scenario's start, at the session's time now (at start and on reset)."""
+        self._t0 = self.session.sim_time_s
+        self._next_change = 0
+        self._switched = False
+        self._held_setpoints: list[float | None] = [None, None]
+        self.at_tick()
+
+    def at_tick(self) -> None:
+        """The rig is at a tick's time t, its sample emitted, about to advance: the changes
+        and set-points due by t go in now (so they act from t on, as a run-time change or a
+        command taken between two ticks does), and a switch due by the next tick's time is
+        asked for now (so the new law answers the first sample at or after its time)."""
+        sc, session = self.scenario, self.session
+        t = session.sim_time_s - self._t0
+        due = t + 1e-9                                   # a tick's time, rounding forgiven
+        while self._next_change < len(sc.changes) and sc.changes[self._next_change][0] <= due:
+            changes = sc.changes[self._next_change][1]
+            self._next_change += 1
+            try:
+                session.change(self._check(session.p, changes) if self._check is not None
+                            else {**session.p, **changes})
+            except ParameterError as exc:
+                session.log.error(f"scenario '{sc.name}': change at {t:.3f} s refused: {exc}")
+        switch = sc.controller
+        if switch is not None and not self._switched and \
+                switch.on_at_s <= due + 1.0 / session.p["rate_hz"]:
+            self._switched = True
+            if session.recorder is not None:
+                session.recorder.record_event("controller", session.sim_time_s,
+                                              {"law": switch.law})
+            session.log.info(f"scenario '{sc.name}': controller {switch.law} switched on at "
+                          f"t = {session.sim_time_s:.3f} s")
+            if self._on_switch is not None:
+                session.switch_pending = self._on_switch(switch.law)
+        speed, hook = sc.commands_at(t, session.rig.params.submerged_weight_n)
+        held = self._held_setpoints
+        for k, (topic, six) in enumerate((
+                (_SPEED, (0.0, 0.0, 0.0, 0.0, 0.0, speed)),
+                (_HOOK, (0.0, 0.0, hook, 0.0, 0.0, 0.0)))):
+            if six[5 - 3 * k] == held[k]:
+                continue
+            held[k] = six[5 - 3 * k]
+            sec, nsec = divmod(session.stamp_ns(), 1_000_000_000)
+            data = _ENCODE(sec, nsec, six) if session.recorder is not None else b""
+            refusal = session.command(topic, rig_topics.FRAME_TOP_DRIVE, six, data, (sec, nsec),
+                                   internal=True)
+            if refusal is not None and refusal != "in flight":
+                session.log.warning(f"scenario '{sc.name}': {topic.name} at {t:.3f} s refused: "
+                                 f"{refusal}")
