@@ -1,7 +1,8 @@
-"""``drill_sim run``: the main job. The rig node and a scenario driver in subprocesses, a live
-status line, and at the end a summary and a plot. A scenario with a ``controller`` section also
-starts ``drill_sim_controller`` (disabled, the rig's drive on its own speed loop) and the driver
-switches it on at its time; the summary and the plot compare before and after."""
+"""``drill_sim run``: the main job. The rig node playing a driller scenario on its own clock
+(``-p scenario:=``) in a subprocess, a live status line, and at the end a summary and a plot. A
+scenario with a ``controller`` section also starts ``drill_sim_controller`` (disabled, the rig's
+drive on its own speed loop), which the rig switches on at its time; the summary and the plot
+compare before and after."""
 
 from __future__ import annotations
 
@@ -69,18 +70,21 @@ def run(args: argparse.Namespace) -> int:
     else:
         bag = new_bag("--record", Path(datetime.now().strftime(
             "drill_sim_session_%Y_%m_%d-%H_%M_%S")))
+    # the rig plays the scenario itself, on its simulated clock (every event on its tick)
+    played = Path(args.scenario)
     node_cmd = [program("drill_sim_node"), "--ros-args", "-p", f"preset:={args.preset}",
                 "-p", f"initial_state:={scenario.initial_state}",
+                "-p", f"scenario:={played.absolute() if played.is_file() else args.scenario}",
                 *(("-p", f"record:={bag.absolute()}") if bag is not None else ()),
                 *args.ros_args]
     switch = None if args.no_controller else scenario.controller
-    procs_before: list[list[str]] = []
+    clients: list[list[str]] = []
     if switch is not None:
         node_cmd[2:2] = ["-p", "top_drive_mode:=speed"]     # the user's -p come later, and win
-        procs_before.append(controller_command(preset, switch.law))
-    drive_cmd = [program("drill_sim_drive"), args.scenario]
-    watched = watch_session(node_cmd, procs_before, drive_cmd, duration,
-                            sys.stdout.isatty(), _status_line)
+        clients.append(controller_command(preset, switch.law))
+    else:
+        node_cmd[2:2] = ["-p", "scenario_controller:=''"]   # a switch is only recorded
+    watched = watch_session(node_cmd, clients, duration, sys.stdout.isatty(), _status_line)
     others, node_exit, received = watched.others, watched.node_exit, watched.received
     if others:
         print(f"drill_sim run: another rig publishes on {watched.topic} ({', '.join(others)}): "

@@ -23,14 +23,20 @@ def switch_on_request(law: str) -> SetParameters.Request:
 
 def switcher(node: Node, controller: str) -> Callable[[str], Future | None]:
     """``switch(law)`` for ``node``: asks the controller node ``controller`` (relative names
-    in the node's namespace) to run ``law``; the call's future, or None (and a warning) when
-    the controller offers no parameter service now."""
+    in the node's namespace) to run ``law``; the call's future, or None (a warning the first
+    time) when the controller offers no parameter service now."""
     client = node.create_client(SetParameters, f"{controller}/set_parameters")
+    said: list[str] = []
 
     def switch(law: str) -> Future | None:
         if not client.service_is_ready():
-            node.get_logger().warning(f"controller switch to {law}: {controller} offers no "
-                                      "parameter service (is it running?); going on without it")
+            if not said:                  # asked again every tick until it is there
+                said.append(law)
+                node.get_logger().warning(f"controller switch to {law}: {controller} offers "
+                                          "no parameter service yet (is it running?); asking "
+                                          "again every tick until it does")
             return None
+        if said:
+            node.get_logger().info(f"{controller} is there: switching {law} on")
         return client.call_async(switch_on_request(law))
     return switch

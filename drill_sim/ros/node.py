@@ -73,7 +73,8 @@ class RigNode(Node):
                 if scenario.initial_state != p["initial_state"]:
                     raise ParameterError(f"it is written for initial_state {scenario.initial_state}"
                                          f"; expected -p initial_state:={scenario.initial_state}")
-                self.session.play(scenario, switcher(self, p["scenario_controller"]),
+                self.session.play(scenario, switcher(self, p["scenario_controller"])
+                                  if p["scenario_controller"] else None,
                                   partial(checked_change, self._specs))
             except ParameterError as exc:
                 raise SystemExit(f"drill_sim_node: parameter scenario = {p['scenario']!r}: "

@@ -1,4 +1,4 @@
-"""The ROS side of ``drill_sim run``: start the rig node, its controller and driver as
+"""The ROS side of ``drill_sim run``: start the rig node and its clients (a controller) as
 subprocesses, watch the rig's samples with a ``Monitor`` for the session's length (a status
 line as it goes), and refuse to mix with another rig of the same name on the domain."""
 
@@ -39,10 +39,9 @@ class OtherRig(Exception):
     """Another rig publishes on the session rig's topics (names: fully qualified nodes)."""
 
 
-def watch_session(node_cmd: list[str], clients: list[list[str]], drive_cmd: list[str],
-                  duration_s: float, tty: bool, status: Callable[[Monitor], str | None]
-                  ) -> Watched:
-    """Run the node, then (once it publishes) the ``clients`` and the driver, for
+def watch_session(node_cmd: list[str], clients: list[list[str]], duration_s: float, tty: bool,
+                  status: Callable[[Monitor], str | None]) -> Watched:
+    """Run the node, then (once it publishes) the ``clients``, for
     ``duration_s`` wall seconds (+2 s); ``status(monitor)`` gives the live status line.
     Every process is stopped at the end: the clients first, then the rig."""
     env = dict(os.environ)
@@ -63,14 +62,13 @@ def watch_session(node_cmd: list[str], clients: list[list[str]], drive_cmd: list
     procs = [] if others else [subprocess.Popen(node_cmd, env=env)]
     node_exit = None
     try:
-        # the driver starts once the rig publishes: a node that refuses its parameters has
+        # the clients start once the rig publishes: a node that refuses its parameters has
         # printed its one line and run ends there, with the node's status 2
         while not others and monitor.count == 0 and node_exit is None:
             executor.spin_once(timeout_sec=0.05)
             node_exit = procs[0].poll()
         if not others and node_exit is None:
             procs += [subprocess.Popen(cmd, env=env) for cmd in clients]
-            procs.append(subprocess.Popen(drive_cmd, env=env))
             node_exit = _live(executor, monitor, procs[0], duration_s, tty, status)
     except KeyboardInterrupt:
         pass

@@ -181,7 +181,7 @@ def specs(preset: Preset) -> list[Spec]:
              read_only="the scenario starts with the session; " + START_ONLY),
         Spec("scenario_controller", "drill_sim_controller", "the controller node a "
              "scenario's controller switch asks (its law and enabled parameters; in lockstep "
-             "the tick waits until it confirms)",
+             "the tick waits until it confirms); empty: the switch is only recorded",
              read_only="the switch's client is made at start; " + START_ONLY),
         Spec("start_paused", False, "start paused: nothing is published until ~/pause false, "
              "so a controller can connect before the first tick",

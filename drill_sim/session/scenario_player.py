@@ -53,7 +53,7 @@ class ScenarioPlayer:
         """From the scenario's start, at the session's time now (at start and on reset)."""
         self._t0 = self.session.sim_time_s
         self._next_change = 0
-        self._switched = False
+        self._switched = self._recorded = False
         self._held_setpoints: list[float | None] = [None, None]
         self.at_tick()
 
@@ -76,14 +76,7 @@ class ScenarioPlayer:
         switch = sc.controller
         if switch is not None and not self._switched and \
                 switch.on_at_s <= due + 1.0 / session.p["rate_hz"]:
-            self._switched = True
-            if session.recorder is not None:
-                session.recorder.record_event("controller", session.sim_time_s,
-                                              {"law": switch.law})
-            session.log.info(f"scenario '{sc.name}': controller {switch.law} switched on at "
-                          f"t = {session.sim_time_s:.3f} s")
-            if self._on_switch is not None:
-                session.switch_pending = self._on_switch(switch.law)
+            self._ask(switch.law)
         speed, hook = sc.commands_at(t, session.rig.params.submerged_weight_n)
         held = self._held_setpoints
         for k, (topic, six) in enumerate((
@@ -99,3 +92,22 @@ class ScenarioPlayer:
             if refusal is not None and refusal != "in flight":
                 session.log.warning(f"scenario '{sc.name}': {topic.name} at {t:.3f} s refused: "
                                  f"{refusal}")
+
+    def _ask(self, law: str) -> None:
+        """Ask for the controller switch: recorded once, asked again at every tick until the
+        controller can be asked (a controller still starting up)."""
+        session = self.session
+        if not self._recorded:
+            self._recorded = True
+            if session.recorder is not None:
+                session.recorder.record_event("controller", session.sim_time_s, {"law": law})
+            first = session.sim_time_s + 1.0 / session.p["rate_hz"]
+            session.log.info(f"scenario '{self.scenario.name}': controller {law} switched on "
+                             f"for the sample at t = {first:.3f} s")
+        if self._on_switch is None:
+            self._switched = True
+            return
+        pending = self._on_switch(law)
+        if pending is not None:
+            self._switched = True
+            session.switch_pending = pending

@@ -97,7 +97,7 @@ def test_bad_arguments_exit_2_with_one_clear_line(args, fragment):
     assert "Traceback" not in proc.stderr
 
 
-def test_main_job_runs_node_and_driver_and_writes_summary_and_plot(tmp_path):
+def test_main_job_runs_the_node_playing_its_scenario_and_writes_summary_and_plot(tmp_path):
     from rosutil import isolate
     isolate()
     png = tmp_path / "run.png"
@@ -108,7 +108,7 @@ def test_main_job_runs_node_and_driver_and_writes_summary_and_plot(tmp_path):
     assert "hole drilled" in proc.stdout and "stick fraction" in proc.stdout
     assert "rpm" in proc.stdout and "WOB" in proc.stdout          # the live status lines
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    # recorded by default; a real-time session with the driver's commands re-runs exactly
+    # recorded by default; a real-time session with its scenario's commands re-runs exactly
     (bag,) = tmp_path.glob("drill_sim_session_*")
     assert f"session recorded to {bag.name}" in proc.stdout
     # the summary counts what the node published: the samples of its bag
@@ -119,7 +119,9 @@ def test_main_job_runs_node_and_driver_and_writes_summary_and_plot(tmp_path):
     resim = run("bag", "resim", str(bag), "--json", check=False)
     assert resim.returncode == 0, resim.stdout + resim.stderr
     r = json.loads(resim.stdout)
-    assert r["exact"] and r["mode"] == "real-time" and r["commands"] > 50
+    # step_test: the start's speed and load, the steps at 10 s (speed) and 30 s (load, past
+    # the 12 s run), each recorded once, on the tick of its time
+    assert r["exact"] and r["mode"] == "real-time" and r["commands"] == 3
 
 
 def test_main_job_bad_arguments(tmp_path):
