@@ -32,10 +32,18 @@ def test_a_new_law_or_new_gains_continue_from_the_last_output():
     out = s.step(m(0.0, motor=5000.0))
     for k in range(1, 50):
         out = s.step(m(k * H, speed=SPEED - 0.05))
+    assert abs(out - 5000.0) > 100.0             # the old law has moved well away from its start
     s.replace_law("soft_speed", {"tuning_frequency_hz": 0.76})
-    assert s.step(m(0.05, speed=SPEED - 0.05)) == pytest.approx(out)
+    assert s.step(m(0.05, speed=SPEED - 0.05)) == pytest.approx(out, rel=1e-9)
+    before = s.last_output                        # taken before the step, not after it
     s.replace_law("soft_speed", {"tuning_frequency_hz": 0.5, "kp_over_impedance": 2.0})
-    assert s.step(m(0.051, speed=SPEED - 0.05)) == pytest.approx(s.last_output)
+    assert s.step(m(0.051, speed=SPEED - 0.05)) == pytest.approx(before, rel=1e-9)
+    # a cold start of the same law from the same measurement lands far from it
+    cold = Supervisor(H, Z, J, "soft_speed", {"tuning_frequency_hz": 0.5,
+                                              "kp_over_impedance": 2.0},
+                      speed_set_rad_s=SPEED)
+    cold._started = True
+    assert abs(cold.step(m(0.051, speed=SPEED - 0.05)) - before) > 100.0
 
 
 def test_bad_gains_are_refused_and_the_law_kept():

@@ -168,6 +168,23 @@ def test_stick_slip_severity_is_the_ssi_of_each_window():
     assert stopped[-1] == SEVERITY_MAX
 
 
+def test_stick_slip_severity_divides_by_the_mean_not_the_mid_range():
+    """A stick-slip-like bit speed (stuck 40 % of each 0.5 s period, then a half-sine burst to
+    P): over whole periods (max - min)/(2 mean) = pi/2.4 = 1.309, where the mid-range would
+    give 1 and a sine cannot tell the two apart. Expected from the samples themselves."""
+    window, peak = 2.0, 20.0
+    b = bank("stick_slip_severity", window_s=window)
+    times = np.arange(6000) * 1e-3
+    phase = (np.arange(6000) % 500) / 500.0
+    speeds = np.where(phase < 0.4, 0.0, peak * np.sin(np.pi * (phase - 0.4) / 0.6))
+    shown = np.array([b.measure(t, sample(bit_speed_rad_s=v)).stick_slip_severity
+                      for t, v in zip(times, speeds, strict=True)])
+    block = speeds[:2000]                               # four whole periods
+    expected = (block.max() - block.min()) / (2.0 * block.mean())
+    assert expected == pytest.approx(np.pi / 2.4, rel=2e-3)
+    assert np.abs(shown[times >= window] - expected).max() < 1e-3 * expected
+
+
 def test_ideal_profile_is_the_exact_value_every_tick():
     b = SensorBank("ideal", 1e-3)
     rng = np.random.default_rng(3)
