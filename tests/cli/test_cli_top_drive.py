@@ -32,7 +32,9 @@ def test_speed_mode_holds_the_set_point_and_writes_the_drive_columns(tmp_path, c
     assert s["top_drive"]["drive_ki_nm_rad"] == pytest.approx(5 * 2900.0)
     assert s["units"]["mean_top_drive_speed"] == "rad/s"
     assert s["units"]["mean_motor_torque"] == "N m"
-    assert s["mean_top_drive_speed"] == pytest.approx(2 * math.pi, rel=5e-3)
+    # the integral holds the mean speed on the set-point: 2e-4 off over the window, where P
+    # alone (K_i 0) leaves it 3.8e-3 low even with the steady start's torque preloaded
+    assert s["mean_top_drive_speed"] == pytest.approx(2 * math.pi, rel=1.2e-3)
     assert s["mean_motor_torque"] == pytest.approx(s["mean_surface_torque"], rel=0.02)
     assert s["stick_fraction"] > 0.2
     rows = _rows(out)

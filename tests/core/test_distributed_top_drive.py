@@ -88,18 +88,21 @@ def test_steady_start_is_an_equilibrium_with_the_drive(mode):
 
 
 def test_speed_mode_holds_the_set_point_in_stick_slip():
-    """The drive's PI (integral action) keeps the mean top-drive speed at the set-point (1 %)
-    while the bit sticks and slips; the mean bit speed follows it."""
+    """The drive's PI (integral action) keeps the mean top-drive speed at the set-point (0.5 %)
+    while the bit sticks and slips, after the weight rose from the steady start's (whose
+    torque the start preloads into the integral: at the same weight P alone would pass); the
+    mean bit speed follows it."""
     p = load_preset("base")
     sim = StringSimulator(p.rig.groups, geometry_waves(p.rig, p.string, H),
                           drive=_drive(p, "speed", drive_kp_nm_s_rad=3e4))
     sim.start_steady(9.6, 1.32, 1e-3)
+    sim.set_commands(12.5, 1.32)            # more weight than the start's preload was for
     sim.run(100.0)
     sim.reset_window()
     m = sim.run(200.0).metrics
     assert m.stick_fraction > 0.02
-    assert m.mean_top_drive_speed == pytest.approx(1.32, rel=1e-2)
-    assert m.mean_bit_speed == pytest.approx(1.32, rel=1e-2)
+    assert m.mean_top_drive_speed == pytest.approx(1.32, rel=5e-3)
+    assert m.mean_bit_speed == pytest.approx(1.32, rel=5e-3)
 
 
 def test_rig_in_torque_mode_spins_the_whole_string_up():
