@@ -45,8 +45,13 @@ def test_output_leaves_the_limit_as_soon_as_the_error_changes_sign(name):
     outputs = [law.step(m(5.0)) for _ in range(5000)]
     assert outputs[-1] == 500.0
     assert all(abs(u) <= 500.0 for u in outputs)
+    # conditional integration: while saturated the integral q did not grow past what puts the
+    # output on the limit (from 0 at the bumpless start: q <= max(0, 500 - K_p e)), so on the
+    # flip to e = -0.01 the output drops at least K_p 0.01 below that; an integral merely
+    # clamped to the limits (q = 500) would leave it within K_p 0.01 of the limit
+    kp = law.pi.kp_nm_s_rad
     law.set_speed(4.99)                      # error -0.01 rad/s
-    assert law.step(m(5.0)) < 500.0 - 1.0
+    assert law.step(m(5.0)) <= max(0.0, 500.0 - kp * 0.2) - kp * 0.01 + 1e-6
     law.set_speed(100.0)                     # and the lower side
     assert law.step(m(5.0)) == 500.0
 

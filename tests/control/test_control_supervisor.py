@@ -68,5 +68,8 @@ def test_saturation_and_windup_are_counted():
     assert w["saturation_fraction"] == 1.0       # 50 Z * 1 rad/s = 15 kN·m > 1 kN·m
     assert w["windup_fraction"] > 0.9            # the integral held on a limit by the clamp
     assert s.take_window()["samples"] == 0
-    # nothing wound up: the output leaves the limit on the first sample the error reverses
-    assert s.step(m(1.0, speed=SPEED + 0.01, motor=1000.0)) < 1000.0
+    # nothing wound up: the bumpless start put the integral at -1000 N·m (what K_p 1 rad/s of
+    # error needs to give 1000), and conditional integration held it there while saturated;
+    # so on the first sample the error reverses the output goes straight to the other limit,
+    # where an integral merely clamped (grown to +1000) would give 1000 - K_p 0.01 = 849
+    assert s.step(m(1.0, speed=SPEED + 0.01, motor=1000.0)) == -1000.0
