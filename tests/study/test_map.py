@@ -9,6 +9,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 from conftest import installed
 
@@ -125,11 +126,26 @@ def test_other_settings_are_refused_naming_the_difference(tmp_path, reference, c
     assert "missing or unreadable" in capsys.readouterr().err
 
 
-def test_plot_with_log_axes_and_another_metric(tmp_path):
+def test_plot_with_log_axes_and_another_metric(tmp_path, monkeypatch):
     out, png = tmp_path / "m.csv", tmp_path / "m.png"
+    import drill_sim.cli.map as map_cli
+    drawn = {}
+    real = map_cli.plot_map
+
+    def spy(path, x, y, values, stick, **kw):
+        drawn.update(values=values, stick=stick, label=kw["metric_label"])
+        return real(path, x, y, values, stick, **kw)
+
+    monkeypatch.setattr(map_cli, "plot_map", spy)
     assert main(["map", "--rpm", "30:250:4", "--wob-kn", "80:200:3", "--log", "--duration", "8",
                  "--workers", "1", "--out", str(out), "--plot", str(png), "--metric", "ssi"]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the figure's field is the SSI column of the CSV, point by point, and says so
+    assert drawn["label"].startswith("ssi")
+    ssi = np.array([float(r["ssi"]) for r in rows(out)]).reshape(4, 3)
+    assert np.array_equal(drawn["values"], ssi)
+    assert np.array_equal(drawn["stick"], np.array(
+        [float(r["stick_fraction"]) > 0 for r in rows(out)]).reshape(4, 3))
     values = [float(r["top_drive_speed_rpm"]) for r in rows(out)][::3]
     assert values[0] == 30.0 and values[-1] == 250.0
     assert values[1] == pytest.approx(30.0 * (250 / 30) ** (1 / 3))       # geometric spacing
@@ -147,6 +163,11 @@ def test_groups_mode_sweeps_any_two_quantities(tmp_path):
     description = json.loads(out.with_suffix(".json").read_text())
     assert description["settings"]["fixed"] == {"w0": 9.6, "psi": 13.73, "lambda": 6.84}
     assert description["columns"]["mse_rotary"] == "epsilon"
+    # each point ran its own beta (the groups' 0.36 for all would give equal rows): at each
+    # speed the two betas give different runs
+    ssi = {(r["omega0"], r["beta"]): r["ssi"] for r in table}
+    assert ssi[("1.0", "0.5")] != ssi[("1.0", "2.0")]
+    assert ssi[("3.0", "0.5")] != ssi[("3.0", "2.0")]
 
 
 @pytest.mark.parametrize("args, fragments", [
