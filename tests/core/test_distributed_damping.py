@@ -17,25 +17,49 @@ from drill_sim.core.distributed import geometry_waves
 from drill_sim.core.distributed_simulator import StringSimulator
 from drill_sim.core.presets import preset_from_dict
 from drill_sim.core.resources import read_yaml
-from drill_sim.core.stability_distributed import natural_frequencies
 
 H = 5e-4
 
 
-def _damped_root(z: float, delay: float, dashpot: float, psi: float, axial: bool,
-                 guess: complex) -> complex:
-    """The root near ``guess`` of the frequency equation of a uniform pipe with damping
-    c per unit length, continuously (m x_tt + c x_t = K x_xx): the lossless transfer matrix
-    with s D replaced by p D, p = sqrt(s (s + c/m)) (c/m = dashpot/(z D) dimensionless), and
-    z s by z p. Top held (speed, or hook force); the BHA at the bottom, bit free."""
+def _si_root(kind: str, preset, geometry, young_modulus_pa: float = 200e9) -> complex:
+    """The first mode's root s [1/s] of a uniform pipe with damping c per unit length,
+    computed in SI from the preset's geometry alone (not from the code's wave lines):
+    m x_tt + c x_t = K x_xx with m = rho J or rho A, K = G J or E A, so k = sqrt(s (s + c/m))/v,
+    v = sqrt(K/m). Torsion: top held, the BHA's inertia I at the bottom,
+    I s^2 sinh(kL) + K k cosh(kL) = 0. Axial: the hook force held (free top), the BHA's mass M
+    at the bottom, M s^2 cosh(kL) + K k sinh(kL) = 0. Newton from the lossless first mode."""
+    g, rho = geometry, geometry.steel_density_kg_m3
+    if kind == "torsion":
+        area = math.pi / 32.0 * (g.pipe_od_m ** 4 - g.pipe_id_m ** 4)      # polar moment
+        m, k_pipe, c = rho * area, g.shear_modulus_pa * area, g.torsional_damping_nm_s_per_rad_m
+        end = preset.rig.bha_inertia_kg_m2
+    else:
+        area = math.pi / 4.0 * (g.pipe_od_m ** 2 - g.pipe_id_m ** 2)
+        m, k_pipe, c = rho * area, young_modulus_pa * area, g.axial_damping_n_s_per_m2
+        end = preset.rig.bha_mass_kg
+    v, length = math.sqrt(k_pipe / m), g.pipe_length_m
+
     def f(s):
-        p = np.sqrt(s * (s + dashpot / (z * delay)))
-        m11, m12 = np.cosh(p * delay), -np.sinh(p * delay) / (z * p)
-        m21, m22 = -z * p * np.sinh(p * delay), np.cosh(p * delay)
-        return s * s * m11 - psi * m21 if axial else s * s * m12 - m22
-    s = guess
+        k = np.sqrt(s * (s + c / m)) / v
+        if kind == "torsion":
+            return end * s * s * np.sinh(k * length) + k_pipe * k * np.cosh(k * length)
+        return end * s * s * np.cosh(k * length) + k_pipe * k * np.sinh(k * length)
+    # the lossless first mode (s = i w): the first sign change of the real equation in w
+    def lossless(w):
+        theta = w * length / v
+        if kind == "torsion":
+            return -end * w * math.sin(theta) + k_pipe / v * math.cos(theta)
+        return end * w * math.cos(theta) + k_pipe / v * math.sin(theta)
+    ws = np.linspace(1e-6, 20.0 * math.sqrt(k_pipe / length / end), 200_001)
+    signs = np.sign([lossless(w) for w in ws])
+    i = int(np.nonzero(signs[1:] != signs[:-1])[0][0])
+    low, high = ws[i], ws[i + 1]
     for _ in range(60):
-        d = 1e-7
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if np.sign(lossless(mid)) == signs[i] else (low, mid)
+    s = 1j * low                                   # then Newton with the damping
+    for _ in range(80):
+        d = 1e-7 * abs(s)
         s = s - f(s) / ((f(s + d) - f(s - d)) / (2 * d))
     return complex(s)
 
@@ -59,16 +83,15 @@ def test_free_modes_decay_as_the_continuously_damped_pipe(name, torsional, axial
     """Off bottom, top held, a kick of top speed and hook force: the first torsional and axial
     modes decay at the continuously damped pipe's rate (1 %; measured 0.04-0.7 % with the 8
     dashpots at the centres of equal parts; at the parts' ends the torsional rate was 16 %
-    off) and ring at its frequency (1e-3)."""
+    off) and ring at its frequency (1e-3), both computed in SI from the geometry (so a wrong
+    SI conversion of the damping or the density is caught, which a reference built from the
+    code's own wave lines let through)."""
     p = load_preset(name)
-    psi = p.rig.groups.psi
     geometry = replace(p.string, torsional_damping_nm_s_per_rad_m=torsional,
                        axial_damping_n_s_per_m2=axial)
     waves = geometry_waves(p.rig, geometry, H)
-    lossless = natural_frequencies(waves, psi, 1)
-    roots = [_damped_root(line.z[0], line.delay.sum(), line.dashpot.sum(), psi, axial_line,
-                          1j * lossless[axial_line][0])
-             for line, axial_line in ((waves.torsion, False), (waves.axial, True))]
+    # the reference in SI from the geometry, in t* units (the one scale taken from the code)
+    roots = [_si_root(kind, p, geometry) * p.rig.scales.time_s for kind in ("torsion", "axial")]
     sim = StringSimulator(p.rig.groups, waves)
     sim.start_at_rest(gap=1e9)
     sim.set_commands(0.0, 0.1)
