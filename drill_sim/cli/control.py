@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -192,6 +193,9 @@ def run(args: argparse.Namespace) -> int:
         _write(args.out, document)
     if args.plot is not None:
         _plot(args.plot, scenarios, results)
+    if args.record is not None:
+        print(f"drill_sim control: {len(results)} sessions recorded in {args.record} "
+              "(<scenario>-<law>; drill_sim bag resim re-runs each)", file=sys.stderr)
     if args.json:
         print(json_line(document))
     else:

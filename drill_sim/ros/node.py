@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import sys
 import time
-from functools import partial
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -25,10 +24,8 @@ from std_srvs.srv import SetBool, Trigger
 
 from ..core import NoSteadyDrilling, ParameterError
 from ..session.diagnostics import CommandCounts, other_publishers_words
-from ..session.parameter_table import checked_change
 from ..session.recorder import RecordRefused
 from ..session.rig_session import Naming, RigSession
-from ..session.scenario import load_scenario
 from ..wire import rig_topics
 from ..wire.rig_topics import RigTopic
 from . import loops, parameters
@@ -58,6 +55,7 @@ class RigNode(Node):
         super().__init__(rig_topics.NODE_NAME, **kwargs)
         try:
             self.preset, self._specs, p = parameters.declare(self)
+            scenario, p = parameters.scenario_of(self, p, self._specs)
             self.session = RigSession(
                 p, geometry=self.preset.string, preset=self.preset.name,
                 naming=Naming(self.get_fully_qualified_name(), self.resolve_topic_name),
@@ -67,18 +65,9 @@ class RigNode(Node):
         except RecordRefused as exc:             # it says what is expected
             raise SystemExit(f"drill_sim_node: parameter record = {p['record']!r}: "
                              f"{exc} (nothing was run)") from None
-        if p["scenario"]:
-            try:
-                scenario = load_scenario(p["scenario"])
-                if scenario.initial_state != p["initial_state"]:
-                    raise ParameterError(f"it is written for initial_state {scenario.initial_state}"
-                                         f"; expected -p initial_state:={scenario.initial_state}")
-                self.session.play(scenario, switcher(self, p["scenario_controller"])
-                                  if p["scenario_controller"] else None,
-                                  partial(checked_change, self._specs))
-            except ParameterError as exc:
-                raise SystemExit(f"drill_sim_node: parameter scenario = {p['scenario']!r}: "
-                                 f"{exc} (nothing was run)") from None
+        if scenario is not None:                 # checked above: nothing is refused now
+            self.session.play(scenario, switcher(self, p["scenario_controller"])
+                              if p["scenario_controller"] else None)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         session = self.session
         # every topic and service from the table, outputs in publishing order
@@ -105,6 +94,7 @@ class RigNode(Node):
             f"{p['rate_hz']:g} Hz, {pace}, "
             f"{'publishing /clock' if session.with_clock else 'wall-clock stamps'}, sensors "
             f"'{session.sensors.profile.name}' (seed {session.sensors.seed})"
+            f"{f', playing scenario {scenario.name!r}' if scenario is not None else ''}"
             f"{', paused' if session.paused else ''}")
         self.get_logger().info(f"rig figures: {session.figures()}")
         parameters.warn_unknown_given(self)

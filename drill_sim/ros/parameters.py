@@ -27,9 +27,12 @@ from ..session.parameter_table import (
     PRESET_READ_ONLY,
     SPLITS,
     Spec,
+    checked_change,
     cross_refusal,
     specs,
 )
+from ..session.scenario import Scenario, load_scenario
+from ..session.scenario_player import checked_changes
 
 _TYPES = {BOOL: ParameterType.PARAMETER_BOOL, INT: ParameterType.PARAMETER_INTEGER,
           FLOAT: ParameterType.PARAMETER_DOUBLE, str: ParameterType.PARAMETER_STRING,
@@ -154,3 +157,29 @@ def warn_unknown_given(node: Node) -> None:
         node.get_logger().warning(
             f"parameter '{name}' is not one of {node.get_name()}'s and is ignored"
             + (f": did you mean '{near[0]}'?" if near else " (none of its names is close)"))
+
+
+def scenario_of(node: Node, p: dict[str, object], by_name: dict[str, Spec]
+                ) -> tuple[Scenario | None, dict[str, object]]:
+    """The scenario the node is to play (``scenario``; None without one) and the parameters
+    it starts with, checked before anything runs (nothing recorded yet): the scenario loads,
+    its ``initial_state`` is the node's (taken from the scenario when ``-p initial_state`` was
+    not given, refused when it was and differs), and every change it makes is one the
+    parameter table accepts. Raises ParameterError naming what is wrong."""
+    if not p["scenario"]:
+        return None, p
+    where = f"parameter scenario = {p['scenario']!r}"
+    try:
+        scenario = load_scenario(str(p["scenario"]))
+        if scenario.initial_state != p["initial_state"]:
+            if "initial_state" in getattr(node, "_parameter_overrides", {}):
+                raise ParameterError(
+                    f"it is written for initial_state {scenario.initial_state}, and "
+                    f"initial_state is {p['initial_state']}; expected -p initial_state:="
+                    f"{scenario.initial_state} (or none: the scenario's is taken)")
+            node.set_parameters([Parameter("initial_state", value=scenario.initial_state)])
+            p = dict(p, initial_state=scenario.initial_state)
+        checked_changes(scenario, p, partial(checked_change, by_name))
+    except ParameterError as exc:
+        raise ParameterError(f"{where}: {exc} (nothing was run)") from None
+    return scenario, p

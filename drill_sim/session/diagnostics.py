@@ -80,7 +80,8 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
                sim_time_s: float, commands: CommandCounts = CommandCounts(),
                lockstep: LockstepStatus | None = None,
                real_time_factor: float = 1.0,
-               other_publishers: tuple[str, ...] = ()) -> Status:
+               other_publishers: tuple[str, ...] = (), every_tick_sampled: bool = False
+               ) -> Status:
     """The status over one diagnostics window. Conditions: ERROR when recording failed;
     WARN, while running, when ticks overran in real-time mode and fewer than SLOW_TICKS of
     ``rate_hz`` [Hz] (the timer ticks expected to publish) came, when real-time ticks
@@ -91,7 +92,8 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
     ``real_time_factor``: the one asked (a stall's ticks are published each at factors up
     to 1, ``pacing.each_sampled``); ``other_publishers``: the nodes other than this rig that
     publish on its samples' topic (another rig of the same name, a replay onto it), a WARN
-    whether running or paused, since every subscriber then sees both."""
+    whether running or paused, since every subscriber then sees both; ``every_tick_sampled``:
+    a stall's ticks each keep their sample however many (a scenario plays)."""
     name = drilling_regime(ssi=metrics["ssi"],
                            stuck=metrics["stick_fraction"] > 0.0 or sample.stick_slip,
                            off_bottom_fraction=metrics["bounce_fraction"],
@@ -110,7 +112,10 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
         if ticks.stalls and not max_speed:
             # ticks the longest stall made due (rate_hz: the wake-ups expected a second)
             due = round(ticks.period_max_s * rate_hz * max(1.0, real_time_factor))
-            if real_time_factor > 1.0:
+            if every_tick_sampled:
+                how = ("each of their ticks published late (a scenario plays: every tick "
+                       "keeps its sample)")
+            elif real_time_factor > 1.0:
                 how = (f"the longest advanced its {due} ticks with one sample (above "
                        "real-time factor 1 every wake-up advances its ticks with one)")
             elif each_sampled(due, real_time_factor):

@@ -399,7 +399,8 @@ class RigSession:
             rate_hz=expected_hz, max_speed=self.pacer.max_speed,
             lockstep=None if self.lockstep is None else self.lockstep.status(now),
             sim_time_s=self.sim_time_s, real_time_factor=p["real_time_factor"],
-            other_publishers=other_publishers, commands=commands)
+            other_publishers=other_publishers, commands=commands,
+            every_tick_sampled=self.player is not None)
 
     def close(self) -> None:
         """Close the bag (if recording)."""

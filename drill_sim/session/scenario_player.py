@@ -18,6 +18,20 @@ _HOOK = rig_topics.COMMAND_BY_RULE["hook_load"]
 _ENCODE = cdr.stamped_vectors(rig_topics.FRAME_TOP_DRIVE)
 
 
+def checked_changes(scenario: Scenario, p: dict[str, object],
+                    check: Callable[[dict[str, object], dict[str, object]], dict[str, object]]
+                    ) -> None:
+    """Every change of ``scenario``, in turn from the parameters ``p``, checked with
+    ``check(old, changes)`` (ParameterError naming the change and what was wrong)."""
+    values = dict(p)
+    for at_s, change in scenario.changes:
+        try:
+            values = check(values, change)
+        except ParameterError as exc:
+            raise ParameterError(f"scenario '{scenario.name}' change at {at_s:g} s: "
+                                 f"{exc}") from None
+
+
 class ScenarioPlayer:
     """A scenario played on a ``RigSession`` (``session``) from the session's time at its
     start."""
@@ -38,13 +52,7 @@ class ScenarioPlayer:
         A reset plays the scenario again from its start."""
         self.session = session
         if check is not None:
-            values = dict(session.p)
-            for at_s, change in scenario.changes:
-                try:
-                    values = check(values, change)
-                except ParameterError as exc:
-                    raise ParameterError(f"scenario '{scenario.name}' change at {at_s:g} s: "
-                                         f"{exc}") from None
+            checked_changes(scenario, session.p, check)
         self.scenario, self._on_switch = scenario, on_switch
         self._check = check
         self.restart()
@@ -89,7 +97,9 @@ class ScenarioPlayer:
             data = _ENCODE(sec, nsec, six) if session.recorder is not None else b""
             refusal = session.command(topic, rig_topics.FRAME_TOP_DRIVE, six, data, (sec, nsec),
                                    internal=True)
-            if refusal is not None and refusal != "in flight":
+            if refusal is None:
+                session.last_command_s = session.clock()     # the rig is being commanded
+            elif refusal != "in flight":
                 session.log.warning(f"scenario '{sc.name}': {topic.name} at {t:.3f} s refused: "
                                  f"{refusal}")
 

@@ -48,11 +48,32 @@ def test_the_node_plays_a_scenario_on_its_own_clock(ros, tmp_path):
 
 
 def test_a_scenario_the_node_cannot_play_stops_it_in_one_line(tmp_path):
+    """Refused before anything runs: one line, status 2, and no bag left behind."""
     path = tmp_path / "bad.yaml"
     path.write_text(yaml.safe_dump(dict(SCENARIO, changes=[
         {"at_s": 0.5, "friction_coeficient": 0.5}])))
+    bag = tmp_path / "never"
     done = subprocess.run([installed("drill_sim_node"), "--ros-args", "-p",
-                           f"scenario:={path}"], capture_output=True, text=True, timeout=60)
+                           f"scenario:={path}", "-p", f"record:={bag}"],
+                          capture_output=True, text=True, timeout=60)
     assert done.returncode == 2
     assert "did you mean friction_coefficient" in done.stderr
-    assert "Traceback" not in done.stderr
+    assert "Traceback" not in done.stderr and not bag.exists()
+    done = subprocess.run([installed("drill_sim_node"), "--ros-args", "-p",
+                           "scenario:=tag_bottom", "-p", "initial_state:=steady"],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "expected -p initial_state:=rest" in done.stderr
+
+
+def test_a_scenario_brings_its_initial_state(ros):
+    """tag_bottom is written for a rig at rest: without -p initial_state the node takes it."""
+    clock: list[float] = []
+    ros.create_subscription(Clock, "/clock", lambda m: clock.append(
+        m.clock.sec + 1e-9 * m.clock.nanosec), 10)
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/tag", "-p",
+                     "scenario:=tag_bottom", "-p", "publish_clock:=true", "-p",
+                     "max_speed:=true", "-p", "rate_hz:=100.0") as node:
+        wait_for(lambda: clock and clock[-1] > 0.5, ros, 60.0, "simulated time 0.5 s")
+    code, out = node.stop()
+    assert code == 0, out
+    assert "playing scenario 'tag_bottom'" in out
