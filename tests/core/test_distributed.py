@@ -8,13 +8,14 @@ import math
 
 import numpy as np
 import pytest
+from pipe_theory import natural_frequencies_rad_s, pipe, polar_moment_m4
 
 from drill_sim.core import Simulator, load_preset
 from drill_sim.core import distributed_kernel as dk
 from drill_sim.core import kernel as kn
 from drill_sim.core.distributed import Section, StringWaves, geometry_waves, string_waves
 from drill_sim.core.distributed_simulator import StringSimulator
-from drill_sim.core.stability_distributed import natural_frequencies, simulated, string_stability
+from drill_sim.core.stability_distributed import simulated, string_stability
 
 H = 5e-4
 
@@ -40,10 +41,12 @@ def _peak(x, dt, near):
 @pytest.mark.parametrize("name", ["base", "deep"])
 def test_natural_frequencies_off_bottom(name):
     """(1) The first three torsional and two axial modes of the free string, measured from
-    the simulated pipe torque and force on the BHA, against the roots of the frequency
-    equation with the geometry's exact travel times (0.5 %)."""
-    _p, groups, waves = _preset(name)
-    tors, axial = natural_frequencies(waves, groups.psi, count=3)
+    the simulated pipe torque and force on the BHA, against the roots of the uniform pipe's
+    frequency equation computed in SI from the preset's geometry (0.5 %)."""
+    p, groups, waves = _preset(name)
+    ts = p.rig.scales.time_s                      # the reference in SI, from the geometry
+    tors = [w * ts for w in natural_frequencies_rad_s("torsion", pipe("torsion", p), 3)]
+    axial = [w * ts for w in natural_frequencies_rad_s("axial", pipe("axial", p), 2)]
     sim = StringSimulator(groups, waves)
     sim.start_at_rest(gap=1e9)                    # far off bottom: the bit is free
     sim.set_commands(0.0, 0.1)                    # a step of top-drive speed: every mode
@@ -66,11 +69,16 @@ def test_wave_travel_and_section_change():
     p = load_preset("base")
     sections = (Section(600.0, 0.127, 0.108), Section(400.0, 0.1397, 0.1086))
     waves = string_waves(p.rig, sections, H)
-    z1, z2 = waves.torsion.z
+    # in SI from the sections (string_waves' defaults: G 77 GPa, steel 8000 kg/m^3), then in
+    # the model's units: impedances over C t*, travel times over t*
+    g, rho = 77e9, 8000.0
+    sc = p.rig.scales
+    z1, z2 = (polar_moment_m4(s.od_m, s.id_m) * math.sqrt(g * rho)
+              / (sc.stiffness_nm_per_rad * sc.time_s) for s in sections)
+    d1, d2 = (s.length_m / math.sqrt(g / rho) / sc.time_s for s in sections)
     sim = StringSimulator(p.rig.groups, waves)
     sim.start_at_rest(gap=1e9)
     sim.set_commands(0.0, 0.1)
-    d1, d2 = waves.torsion.delay
     rows = sim.record(2 * d1 + 0.2, H)
     # the front (step means, smeared over a step per fractional travel time) crosses half its
     # height at the step midpoints' time (k + 1/2) h = the travel time

@@ -10,6 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from pipe_theory import first_root, pipe
 
 from drill_sim.core import ParameterError, Rig, load_preset
 from drill_sim.core import distributed_kernel as dk
@@ -19,49 +20,6 @@ from drill_sim.core.presets import preset_from_dict
 from drill_sim.core.resources import read_yaml
 
 H = 5e-4
-
-
-def _si_root(kind: str, preset, geometry, young_modulus_pa: float = 200e9) -> complex:
-    """The first mode's root s [1/s] of a uniform pipe with damping c per unit length,
-    computed in SI from the preset's geometry alone (not from the code's wave lines):
-    m x_tt + c x_t = K x_xx with m = rho J or rho A, K = G J or E A, so k = sqrt(s (s + c/m))/v,
-    v = sqrt(K/m). Torsion: top held, the BHA's inertia I at the bottom,
-    I s^2 sinh(kL) + K k cosh(kL) = 0. Axial: the hook force held (free top), the BHA's mass M
-    at the bottom, M s^2 cosh(kL) + K k sinh(kL) = 0. Newton from the lossless first mode."""
-    g, rho = geometry, geometry.steel_density_kg_m3
-    if kind == "torsion":
-        area = math.pi / 32.0 * (g.pipe_od_m ** 4 - g.pipe_id_m ** 4)      # polar moment
-        m, k_pipe, c = rho * area, g.shear_modulus_pa * area, g.torsional_damping_nm_s_per_rad_m
-        end = preset.rig.bha_inertia_kg_m2
-    else:
-        area = math.pi / 4.0 * (g.pipe_od_m ** 2 - g.pipe_id_m ** 2)
-        m, k_pipe, c = rho * area, young_modulus_pa * area, g.axial_damping_n_s_per_m2
-        end = preset.rig.bha_mass_kg
-    v, length = math.sqrt(k_pipe / m), g.pipe_length_m
-
-    def f(s):
-        k = np.sqrt(s * (s + c / m)) / v
-        if kind == "torsion":
-            return end * s * s * np.sinh(k * length) + k_pipe * k * np.cosh(k * length)
-        return end * s * s * np.cosh(k * length) + k_pipe * k * np.sinh(k * length)
-    # the lossless first mode (s = i w): the first sign change of the real equation in w
-    def lossless(w):
-        theta = w * length / v
-        if kind == "torsion":
-            return -end * w * math.sin(theta) + k_pipe / v * math.cos(theta)
-        return end * w * math.cos(theta) + k_pipe / v * math.sin(theta)
-    ws = np.linspace(1e-6, 20.0 * math.sqrt(k_pipe / length / end), 200_001)
-    signs = np.sign([lossless(w) for w in ws])
-    i = int(np.nonzero(signs[1:] != signs[:-1])[0][0])
-    low, high = ws[i], ws[i + 1]
-    for _ in range(60):
-        mid = 0.5 * (low + high)
-        low, high = (mid, high) if np.sign(lossless(mid)) == signs[i] else (low, mid)
-    s = 1j * low                                   # then Newton with the damping
-    for _ in range(80):
-        d = 1e-7 * abs(s)
-        s = s - f(s) / ((f(s + d) - f(s - d)) / (2 * d))
-    return complex(s)
 
 
 def _band_mode(x: np.ndarray, dt: float, near: float) -> complex:
@@ -91,7 +49,8 @@ def test_free_modes_decay_as_the_continuously_damped_pipe(name, torsional, axial
                        axial_damping_n_s_per_m2=axial)
     waves = geometry_waves(p.rig, geometry, H)
     # the reference in SI from the geometry, in t* units (the one scale taken from the code)
-    roots = [_si_root(kind, p, geometry) * p.rig.scales.time_s for kind in ("torsion", "axial")]
+    roots = [first_root(kind, pipe(kind, p, geometry)) * p.rig.scales.time_s
+             for kind in ("torsion", "axial")]
     sim = StringSimulator(p.rig.groups, waves)
     sim.start_at_rest(gap=1e9)
     sim.set_commands(0.0, 0.1)

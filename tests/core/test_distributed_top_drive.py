@@ -8,13 +8,18 @@ from __future__ import annotations
 import math
 
 import pytest
+from pipe_theory import (
+    natural_frequencies_rad_s,
+    natural_frequencies_with_top_inertia_rad_s,
+    pipe,
+    polar_moment_m4,
+)
 from test_distributed import _peak
 
 from drill_sim.core import Rig, load_preset
 from drill_sim.core import distributed_kernel as dk
 from drill_sim.core.distributed import geometry_waves
 from drill_sim.core.distributed_simulator import StringSimulator
-from drill_sim.core.stability_distributed import natural_frequencies
 from drill_sim.core.top_drive import TopDriveParameters
 
 H = 5e-4
@@ -28,14 +33,17 @@ def _drive(p, mode, **kw):
 @pytest.mark.parametrize("inertia_kg_m2", [2900.0, 300.0])
 def test_free_string_rings_at_the_roots_with_the_drive_inertia_on_top(inertia_kg_m2):
     """Off bottom, torque mode, a motor torque pulse: the first three torsional modes of the
-    pipe torque on the BHA are the roots of s^2 (m11 - j s^2 m12) - (m21 - j s^2 m22) (0.5 %;
-    measured ~5e-6), and the first is more than 1 % from the speed-held string's (so a top
-    boundary that ignored the drive would fail)."""
+    pipe torque on the BHA are those of the uniform pipe between the drive's J and the BHA's I,
+    computed in SI from the geometry (0.5 %), and the first is more than 1 % from the
+    speed-held string's (so a top boundary that ignored the drive would fail)."""
     p = load_preset("base")
     waves = geometry_waves(p.rig, p.string, H)
     drive = _drive(p, "torque", top_drive_inertia_kg_m2=inertia_kg_m2)
-    tors, _ = natural_frequencies(waves, p.rig.groups.psi, 3, top_inertia=drive.j)
-    held, _ = natural_frequencies(waves, p.rig.groups.psi, 1)
+    # the reference in SI from the geometry and the drive's J (not the code's wave lines)
+    ts, torsion = p.rig.scales.time_s, pipe("torsion", p)
+    tors = [w * ts for w in natural_frequencies_with_top_inertia_rad_s(torsion,
+                                                                       inertia_kg_m2, 3)]
+    held = [w * ts for w in natural_frequencies_rad_s("torsion", torsion, 1)]
     assert abs(tors[0] / held[0] - 1.0) > 1e-2
     sim = StringSimulator(p.rig.groups, waves, drive=drive)
     sim.start_at_rest(gap=1e9)
@@ -116,8 +124,10 @@ def test_rig_in_torque_mode_spins_the_whole_string_up():
     rig.command_motor_torque(5e3)
     rig.advance(20.0)
     s = rig.sample()
-    pipe = rig.sim.waves.pipe_inertia * p.rig.bha_inertia_kg_m2
-    total = td.top_drive_inertia_kg_m2 + pipe + p.rig.bha_inertia_kg_m2
+    g = p.string                                   # the pipe's inertia in SI, rho J L
+    pipe_inertia = g.steel_density_kg_m3 * polar_moment_m4(g.pipe_od_m, g.pipe_id_m) \
+        * g.pipe_length_m
+    total = td.top_drive_inertia_kg_m2 + pipe_inertia + p.rig.bha_inertia_kg_m2
     expected = 5e3 * rig.time_s / total
     assert s.motor_torque_nm == 5e3
     assert s.off_bottom
