@@ -64,6 +64,19 @@ def test_rosbags_reads_counts_types_qos_and_values(tmp_path):
         assert r.duration == pytest.approx(2.99e9, abs=2)
 
 
+def test_metadata_yaml_counts_every_message_per_file_and_topic(tmp_path):
+    """rosbag2 reads the counts from metadata.yaml (not the MCAP): 300 + 300 + 30 messages."""
+    import yaml
+    bag = tmp_path / "counted"
+    _write(bag)
+    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert info["message_count"] == 630
+    assert sum(f["message_count"] for f in info["files"]) == 630
+    assert {t["topic_metadata"]["name"]: t["message_count"]
+            for t in info["topics_with_message_count"]} == {
+        "/rig/bit/wrench": 300, "/rig/cmd/top_drive": 30, "/rig/joint_states": 300}
+
+
 def test_mcap_ros2_support_decodes_every_message_from_the_schema(tmp_path):
     bag = tmp_path / "session"
     _write(bag)

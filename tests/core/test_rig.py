@@ -23,6 +23,16 @@ def test_si_steady_start_reads_the_steady_state(base):
     assert s.time_s == pytest.approx(0.5, abs=rig.dt_s)
 
 
+def test_a_perturbed_steady_start_speeds_only_the_bit(base):
+    """perturbation p: the bit starts at (1 + p) times the steady speed, the top drive at
+    the steady speed (the start every stick-slip run grows from)."""
+    rig = Rig(base.rig)
+    rig.start_steady(base.top_drive_speed_rad_s, base.hook_load_n, perturbation=0.01)
+    s = rig.sample()
+    assert s.bit_speed_rad_s == pytest.approx(1.01 * base.top_drive_speed_rad_s, rel=1e-12)
+    assert s.top_drive_speed_rad_s == pytest.approx(base.top_drive_speed_rad_s, rel=1e-12)
+
+
 def test_advance_to_counts_whole_steps(base):
     rig = Rig(base.rig, dt_s=1e-4)
     assert rig.advance_to(0.01) == 100

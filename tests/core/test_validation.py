@@ -90,6 +90,41 @@ def test_averaged_invariants_in_stationary_stick_slip(base_groups, base_commands
     assert m.mean_surface_torque > steady_state(base_groups, w0, omega0).t0
 
 
+def test_a_stuck_bit_breaks_free_when_the_string_torque_reaches_the_stick_law(base_groups,
+                                                                              base_commands):
+    """The stick law (model contract, section 2): a stuck bit pressed on the rock stays stuck
+    while T_s <= n delta + beta lambda, cutting plus the wear flats' friction fully mobilised.
+    In stick-slip, sampled every step, the string torque on the first step of each slip is
+    that threshold to within one step's torque increase (Omega0 h while stuck). Catches a
+    stick law without the friction term (off by beta lambda = 2.5 here) or with the wrong
+    depth of cut."""
+    g = base_groups
+    w0, omega0 = base_commands
+    sim = Simulator(g)
+    sim.start_steady(w0, omega0, perturbation=1e-3)
+    sim.run(300.0)                                   # into stationary stick-slip
+    tr = sim.run(40.0, output_interval=sim.dt)
+    release = np.nonzero(tr.stuck[:-1] & ~tr.stuck[1:])[0]
+    assert release.size >= 3                         # several sticks in 40 t*
+    threshold = g.n * tr.delta_n[release] + g.beta * g.lam
+    assert np.abs(tr.ts[release] - threshold).max() <= 2.0 * omega0 * sim.dt
+
+
+def test_ssi_is_the_spread_over_twice_the_mean_bit_speed(base_groups, base_commands):
+    """The model's SSI is (max - min)/(2 mean) of the bit speed over the window: against
+    the bit speed sampled every step over the same window (1e-3: a sampled mean)."""
+    w0, omega0 = base_commands
+    sim = Simulator(base_groups)
+    sim.start_steady(w0, omega0, perturbation=1e-3)
+    sim.run(300.0)
+    sim.reset_window()
+    tr = sim.run(30.0, output_interval=sim.dt)
+    w = tr.omega
+    m = sim.window_metrics()
+    assert m.ssi == pytest.approx((w.max() - w.min()) / (2.0 * w.mean()), rel=1e-3)
+    assert m.ssi > 1.0                               # stick-slip: the spread is large
+
+
 @pytest.mark.parametrize("beta, sticks", [(0.36, True), (0.8, True), (1.2, False), (1.6, False)])
 def test_stick_slip_only_if_beta_below_one(beta, sticks, base_commands):
     """4. base groups with beta varied, 1200 t* from a 1e-3 perturbation of steady drilling."""

@@ -341,3 +341,13 @@ def test_the_steady_start_turns_into_stick_slip_as_node_md_says():
     assert 11.0 < onsets[0] < 13.5
     periods = [b - a for a, b in itertools.pairwise(onsets[1:])]
     assert all(p == pytest.approx(1.57, abs=0.03) for p in periods)
+
+
+def test_a_short_stall_samples_each_tick_and_a_long_one_all_at_once():
+    """Up to CATCH_UP_TICKS missed ticks each keep their sample (published late); a longer
+    stall advances its ticks with one sample (publishing hundreds back to back would delay
+    the next ticks further)."""
+    pacer = Pacer(1000.0, 1.0, False, 1.0, 0.0)
+    assert pacer.samples(5) == (1,) * 5                  # 5 ticks: the documented limit
+    assert pacer.samples(8) == (8,)
+    assert pacer.samples(1) == (1,) and pacer.samples(0) == ()

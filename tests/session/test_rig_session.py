@@ -94,8 +94,9 @@ def test_a_torque_command_needs_torque_mode_and_one_in_flight_is_dropped(base):
     data = TWIST(0, 0, (0, 0, 0, 0, 0, 1000.0))
     assert s.receive(TORQUE, data) is None
     s.change(dict(s.p, top_drive_mode="speed"))
+    clock.now += 0.3                                        # sent 0.3 s before it came
     assert s.receive(TORQUE, data) == "in flight"          # crossed the switch on the way
-    clock.now += IN_FLIGHT_S + 0.01
+    clock.now += IN_FLIGHT_S - 0.3 + 0.01
     refusal = s.receive(TORQUE, data)
     assert refusal != "in flight" and "top_drive_mode = torque" in refusal[2]
 
@@ -160,11 +161,14 @@ def test_measured_on_sample_sends_a_measured_topic_only_when_fresh(base):
 def test_lockstep_holds_the_tick_until_every_topic_answers_its_stamp(base):
     s = RigSession(params(base, lockstep=True, lockstep_topics=["cmd/top_drive",
                                                                 "cmd/hook_load"]))
-    stamp = s.emit(Sent(s).send)
+    s.advance(1)
+    stamp = s.emit(Sent(s).send)                            # the tick at 1 ms waits
     ls = s.lockstep
     assert not ls.complete
     sec, nsec = divmod(stamp, 1_000_000_000)
-    s.receive(SPEED, TWIST(sec, nsec + 1, (0, 0, 0, 0, 0, 6.0)))     # not this tick's stamp
+    s.receive(SPEED, TWIST(sec, nsec + 1, (0, 0, 0, 0, 0, 6.0)))     # not this tick's stamp,
+    s.receive(HOOK, TWIST(sec, nsec + 1, (0, 0, 5e5, 0, 0, 0)))      # later ones
+    s.receive(SPEED, TWIST(sec, nsec - 1, (0, 0, 0, 0, 0, 6.0)))     # nor an earlier one
     assert not ls.complete
     s.receive(SPEED, TWIST(sec, nsec, (0, 0, 0, 0, 0, 6.0)))
     assert not ls.complete                                  # the hook load has not answered

@@ -1,0 +1,218 @@
+"""Breaks the suite must catch: each a mistake a domain expert could make (a sign, a missing
+term, a wrong unit conversion, an off-by-one), written as edits of the source, and the tests
+that must fail when it is made. ``tests/breaks/run.py`` applies each in a scratch copy of the
+tree, runs its tests, and reports caught or missed (msg_docs/testing.md).
+
+A new law, kernel term or sensor operation comes with its breaks here."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Break:
+    """``edits``: (file, text, replacement), each text found exactly once in its file;
+    ``tests``: pytest node ids that must fail with the edits made."""
+
+    name: str
+    edits: tuple[tuple[str, str, str], ...]
+    tests: tuple[str, ...]
+
+
+def one(name: str, file: str, text: str, replacement: str, *tests: str) -> Break:
+    return Break(name, ((file, text, replacement),), tuple(tests))
+
+
+CORE, CONTROL, SESSION, CLI = "drill_sim/core/", "drill_sim/control/", "drill_sim/session/", \
+    "drill_sim/cli/"
+T_TOP_DRIVE = "tests/core/test_top_drive.py"
+T_DIST = "tests/core/test_distributed.py"
+T_DIST_TD = "tests/core/test_distributed_top_drive.py"
+T_DAMP = "tests/core/test_distributed_damping.py"
+T_LAWS = "tests/control/test_control_laws.py"
+T_SUP = "tests/control/test_control_supervisor.py"
+T_EVAL = "tests/control/test_control_evaluation.py"
+T_SESSION = "tests/session/test_rig_session.py"
+T_SCENARIO = "tests/session/test_scenario_on_the_clock.py"
+T_MAP = "tests/study/test_map.py"
+
+BREAKS: tuple[Break, ...] = (
+    # ---- the top drive ----------------------------------------------------------------
+    one("drive PI without its integral (K_i written as 0)", CORE + "simulator.py",
+        "p[kn.P_KP], p[kn.P_KI] = d.rate, d.lag, d.kp, d.ki",
+        "p[kn.P_KP], p[kn.P_KI] = d.rate, d.lag, d.kp, 0.0",
+        f"{T_TOP_DRIVE}::test_speed_mode_holds_the_set_point_while_drilling",
+        f"{T_DIST_TD}::test_speed_mode_holds_the_set_point_in_stick_slip",
+        "tests/cli/test_cli_top_drive.py::"
+        "test_speed_mode_holds_the_set_point_and_writes_the_drive_columns"),
+    one("drive inertia counted with the BHA's (j = (J_TD + I)/I)", CORE + "top_drive.py",
+        "j=self.top_drive_inertia_kg_m2 / bha_inertia_kg_m2",
+        "j=(self.top_drive_inertia_kg_m2 + bha_inertia_kg_m2) / bha_inertia_kg_m2",
+        "tests/cli/test_cli_top_drive.py::"
+        "test_torque_mode_off_bottom_accelerates_under_the_command",
+        T_TOP_DRIVE + "::test_motor_torque_step_accelerates_both_inertias_and_rings_at_the"
+        "_two_inertia_mode"),
+    # ---- the distributed string's SI conversion ---------------------------------------
+    one("steel density x1.5 in the wave lines", CORE + "distributed.py",
+        "    rho = steel_density_kg_m3\n", "    rho = 1.5 * steel_density_kg_m3\n",
+        f"{T_DIST}::test_natural_frequencies_off_bottom", f"{T_DIST}::test_wave_travel_and"
+        "_section_change", f"{T_DIST_TD}::test_free_string_rings_at_the_roots_with_the_drive"
+        "_inertia_on_top", f"{T_DIST_TD}::test_rig_in_torque_mode_spins_the_whole_string_up"),
+    one("axial damping x3 in the SI conversion", CORE + "distributed.py",
+        "dash.append(getattr(sec, damp) * sec.length_m / k / imp_scale",
+        "dash.append((3.0 if damp == 'axial_damping' else 1.0) * getattr(sec, damp)"
+        " * sec.length_m / k / imp_scale",
+        f"{T_DAMP}::test_free_modes_decay_as_the_continuously_damped_pipe"),
+    # ---- sensors ------------------------------------------------------------------------
+    one("severity divided by the mid-range, not the mean", CORE + "sensors.py",
+        "mean = win[W_SUM] / win[W_N] if win[W_N] > 0 else w",
+        "mean = 0.5 * (win[W_MAX] + win[W_MIN]) if win[W_N] > 0 else w",
+        "tests/core/test_sensors.py::"
+        "test_stick_slip_severity_divides_by_the_mean_not_the_mid_range"),
+    # ---- laws and supervisor -------------------------------------------------------------
+    one("PI without conditional integration (integral only clamped)", CONTROL + "laws.py",
+        "        if p + q > self.torque_max_nm and error_rad_s > 0.0:\n"
+        "            q = max(self.q_nm, self.torque_max_nm - p)\n"
+        "        elif p + q < self.torque_min_nm and error_rad_s < 0.0:\n"
+        "            q = min(self.q_nm, self.torque_min_nm - p)\n", "",
+        f"{T_LAWS}::test_output_leaves_the_limit_as_soon_as_the_error_changes_sign",
+        f"{T_SUP}::test_saturation_and_windup_are_counted"),
+    one("a new law starts cold (no bumpless take-over)", CONTROL + "supervisor.py",
+        "        self.law = new\n        self._started = False",
+        "        self.law = new\n        self._started = True",
+        f"{T_SUP}::test_a_new_law_or_new_gains_continue_from_the_last_output"),
+    # ---- the offline loop, maps ----------------------------------------------------------
+    one("the loop's series stamped 50 ms late", CONTROL + "closed_loop.py",
+        'series["time_s"][k] = s.time_s', 'series["time_s"][k] = s.time_s + 0.05',
+        f"{T_EVAL}::test_series_are_sampled_at_h"),
+    one("a groups map drops beta from each point", CLI + "map_grid.py",
+        'lam=v["lambda"], beta=v["beta"])', 'lam=v["lambda"])',
+        f"{T_MAP}::test_groups_mode_sweeps_any_two_quantities"),
+    one("the map's figure hard-wired to the stick fraction", CLI + "map.py",
+        "column = next(c for c in METRICS if c.name == args.metric)",
+        'column = next(c for c in METRICS if c.name == "stick_fraction")',
+        f"{T_MAP}::test_plot_with_log_axes_and_another_metric"),
+    # ---- the session ---------------------------------------------------------------------
+    Break("scenario events applied once per advance, not per tick", (
+        (SESSION + "rig_session.py",
+         "                for _ in range(ticks):\n                    self.player.at_tick()\n"
+         "                    self.rig.advance_steps(self._steps_per_tick)",
+         "                self.player.at_tick()\n"
+         "                self.rig.advance_steps(ticks * self._steps_per_tick)"),
+        (SESSION + "rig_session.py", "        if self.player is None or ticks == 1:",
+         "        if True:")),
+        (f"{T_SCENARIO}::test_the_wall_clock_grouping_of_ticks_changes_nothing",)),
+    one("the session's initial hook load adds the WOB instead of subtracting it",
+        SESSION + "rules.py",
+        'hook = rig.params.submerged_weight_n - p["initial_weight_on_bit_n"]',
+        'hook = rig.params.submerged_weight_n + 0.1 * p["initial_weight_on_bit_n"]',
+        "tests/session/test_session_top_drive.py"),
+    one("a sample's stamp split at microseconds, not seconds", SESSION + "rig_messages.py",
+        "sec, nsec = divmod(stamp_ns, 1_000_000_000)", "sec, nsec = divmod(stamp_ns, 1_000_000)",
+        f"{T_SESSION}::test_measured_on_sample_sends_a_measured_topic_only_when_fresh"),
+    one("the re-run truncates a stamp's step instead of rounding it", SESSION + "resim.py",
+        "step = round((sim_time_s - self.session.offset_s) / self.rig.dt_s)",
+        "step = int((sim_time_s - self.session.offset_s) / self.rig.dt_s)",
+        f"{T_SESSION}::test_a_recorded_session_resimulates_bit_for_bit"),
+    one("lockstep takes a later stamp as the answer", SESSION + "lockstep.py",
+        "if stamp_ns == self.stamp_ns and topic in self.missing:",
+        "if stamp_ns >= self.stamp_ns and topic in self.missing:",
+        f"{T_SESSION}::test_lockstep_holds_the_tick_until_every_topic_answers_its_stamp"),
+    one("a command's frame is not checked", SESSION + "rules.py",
+        "    if frame_id not in COMMAND_FRAMES:", "    if False:",
+        f"{T_SESSION}::test_a_refused_command_leaves_the_rig_untouched"),
+    one("no in-flight grace after a drive-mode change", SESSION + "rig_session.py",
+        "IN_FLIGHT_S = 0.5", "IN_FLIGHT_S = 0.0",
+        f"{T_SESSION}::test_a_torque_command_needs_torque_mode_and_one_in_flight_is_dropped"),
+    one("a reset restarts the session's clock", SESSION + "rig_session.py",
+        "        self.offset_s = offset\n", "        self.offset_s = 0.0\n",
+        f"{T_SESSION}::test_reset_starts_again_and_simulated_time_goes_on"),
+    one("the start's perturbation ignored", SESSION + "rules.py",
+        'perturbation=p.get("initial_perturbation", 0.0)', "perturbation=0.0",
+        "tests/cli/test_cli_control.py::"
+        "test_the_start_perturbation_is_one_option_and_an_offline_run_writes_an_exact_bag"),
+    one("a scenario's controller switch asked a tick late", SESSION + "scenario_player.py",
+        'switch.on_at_s <= due + 1.0 / session.p["rate_hz"]', "switch.on_at_s <= due",
+        f"{T_SCENARIO}::test_each_event_lands_on_the_tick_of_its_time"),
+    one("MSE with the bit's circumference instead of its area", CONTROL + "evaluation.py",
+        "    area = math.pi * preset.rig.bit_radius_m ** 2\n    drilled_m",
+        "    area = 2.0 * math.pi * preset.rig.bit_radius_m\n    drilled_m",
+        f"{T_EVAL}::test_mse_of_steady_drilling_is_teale_on_the_steady_state"),
+    # ---- the kernel's laws ------------------------------------------------------------
+    one("the stick law without the wear-flat friction", CORE + "kernel.py",
+        "        return nd + beta_lam\n    return nd", "        return nd\n    return nd",
+        "tests/core/test_validation.py::"
+        "test_a_stuck_bit_breaks_free_when_the_string_torque_reaches_the_stick_law"),
+    one("the contact law's g = 1 branch without the wear-flat force", CORE + "kernel.py",
+        "v1 = v + hpsi * (w0 - nd - lam)", "v1 = v + hpsi * (w0 - nd)",
+        "tests/core/test_validation.py::test_exact_steady_start_stays_on_the_trivial_solution",
+        "tests/core/test_validation.py::test_averaged_invariants_in_stationary_stick_slip"),
+    one("the drive's PI with its proportional gain halved", CORE + "kernel.py",
+        "        half = 0.5 * kp\n", "        half = 0.25 * kp\n",
+        f"{T_TOP_DRIVE}::test_speed_mode_holds_the_set_point_while_drilling",
+        "tests/core/test_top_drive.py"),
+    one("torque mode applies the command without its rate and torque limits", CORE + "kernel.py",
+        "        r = min(max(t_cmd, lo), hi)\n", "        r = t_cmd\n",
+        f"{T_TOP_DRIVE}::test_saturated_and_rate_limited_commands_show_the_limits"),
+    # ---- the wire, bags, metrics --------------------------------------------------------
+    one("stamped vectors written torque first", "drill_sim/wire/cdr.py",
+        "values.pack_into(buf, at_values, *six)",
+        "values.pack_into(buf, at_values, *six[3:], *six[:3])",
+        "tests/wire/test_cdr.py::test_stamped_vectors_match_rclpy"),
+    one("a bag's SSI over the mean, not twice the mean", "drill_sim/bag/rig_stats.py",
+        '"ssi": (self.w_max - self.w_min) / (2 * mean)', '"ssi": (self.w_max - self.w_min) / mean',
+        "tests/bag/test_bag_stream.py::test_metrics_over_the_stream_equal_the_whole_series"),
+    one("the model's SSI over the mean, not twice the mean", CORE + "metrics.py",
+        "ssi=spread / (2.0 * mean_omega)", "ssi=spread / mean_omega",
+        "tests/core/test_validation.py::test_ssi_is_the_spread_over_twice_the_mean_bit_speed"),
+    one("a bag's metadata counts one message less a file", "drill_sim/bag/metadata.py",
+        '"message_count": count}', '"message_count": count - 1}',
+        "tests/bag/test_bag.py::test_metadata_yaml_counts_every_message_per_file_and_topic"),
+    # ---- sensors --------------------------------------------------------------------------
+    one("quantisation truncates instead of rounding to the nearest step", CORE + "sensors.py",
+        "                v = round(v / q) * q\n", "                v = math.floor(v / q) * q\n",
+        "tests/core/test_sensors.py::test_quantisation_rounds_to_the_nearest_step"),
+    one("a sensor's bias subtracted", CORE + "sensors.py",
+        "v = st[c, S_Y] + par[c, P_BIAS]", "v = st[c, S_Y] - par[c, P_BIAS]",
+        "tests/core/test_sensors.py"),
+    # ---- control filters -------------------------------------------------------------------
+    one("a first-order section's decay linearised (1 - h/tau)", CONTROL + "filters.py",
+        "self.decay = math.exp(-h_s / self.tau_s) if self.tau_s > 0.0 else 0.0",
+        "self.decay = max(0.0, 1.0 - h_s / self.tau_s) if self.tau_s > 0.0 else 0.0",
+        "tests/control/test_control_filters.py::"
+        "test_held_lag_is_the_exact_exponential_of_a_held_step"),
+    # ---- SI at the boundary, the session's rules, pacing, Z-Torque --------------------------
+    one("the rig's speed command scaled by 1/t* instead of t*", CORE + "rig.py",
+        "        return speed_rad_s * self.scales.time_s\n",
+        "        return speed_rad_s / self.scales.time_s\n",
+        "tests/core/test_rig.py::test_si_steady_start_reads_the_steady_state"),
+    one("W0 from the hook load with the wrong sign", CORE + "rig.py",
+        "return (self.params.submerged_weight_n - hook_load_n) / self.scales.force_n",
+        "return (hook_load_n - self.params.submerged_weight_n) / self.scales.force_n",
+        "tests/core/test_rig.py"),
+    one("a recorded parameter change not redone by the re-run", SESSION + "resim.py",
+        "            new.update({k: rules.parse_value(v) for k, v in event[\"values\"].items()})\n",
+        "",
+        f"{T_SESSION}::test_a_recorded_session_resimulates_bit_for_bit"),
+    one("a stall of any length published tick by tick (no catch-up limit)",
+        SESSION + "pacing.py", "CATCH_UP_TICKS = 5\n", "CATCH_UP_TICKS = 10**9\n",
+        "tests/session/test_node_policy.py::"
+        "test_a_short_stall_samples_each_tick_and_a_long_one_all_at_once"),
+    one("a tick of one step more than its share", SESSION + "rules.py",
+        '    return tick_s / steps_per_tick(tick_s, p["dt_s"])',
+        '    return tick_s / (steps_per_tick(tick_s, p["dt_s"]) + 1)',
+        "tests/session/test_node_policy.py::test_the_step_divides_the_tick"),
+    one("Z-Torque's torque feedback with the wrong sign", CONTROL + "z_torque.py",
+        "- self.alpha * t_tilde / self.impedance_nm_s_rad)",
+        "+ self.alpha * t_tilde / self.impedance_nm_s_rad)",
+        "tests/control/test_z_torque_alignment.py"),
+    one("the bumpless start leaves the law's first output off the current torque",
+        CONTROL + "laws.py", "        q = output_nm - feedforward_nm - gain * error_rad_s\n",
+        "        q = output_nm - feedforward_nm - self.kp_nm_s_rad * error_rad_s\n",
+        f"{T_LAWS}::test_bumpless_start_first_output_is_the_current_torque"),
+    one("the steady start's bit speed not perturbed", CORE + "simulator.py",
+        "self._x[kn.X_OMEGA] = st.omega0 * (1.0 + perturbation)",
+        "self._x[kn.X_OMEGA] = st.omega0",
+        "tests/core/test_rig.py::test_a_perturbed_steady_start_speeds_only_the_bit"),
+)
