@@ -92,7 +92,10 @@ def test_torque_mode_applies_the_command_through_limit_and_lag_and_resim_is_exac
         assert all(t == t0_nm for _, t in rig.motor)
         rig.until(lambda: rig.motor[-1][1] != t0_nm, "the motor torque to move",
                   lambda: rig.send_torque(1e5))
-        spin_for(ros, 0.3)
+        moved = next(t for t, s in rig.motor if s != t0_nm)
+        # 0.3 s of samples after it (a loaded machine may deliver them late: wait for them)
+        wait_for(lambda: rig.motor[-1][0] - moved >= 0.3, ros, 60.0,
+                 "0.3 s of simulated time after the command")
         before = [s for s in rig.motor if s[1] == t0_nm]
         t_c = before[-1][0]                           # the tick that took the command
         after = [s for s in rig.motor if s[0] > t_c]
