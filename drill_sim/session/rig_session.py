@@ -105,7 +105,6 @@ class RigSession:
         self.player: ScenarioPlayer | None = None
         self.switch_pending = None              # a controller switch not yet confirmed
         self.sample_held = False                # a tick's sample held until it is
-        self._on_switch: Callable[[str], object] | None = None
         self.recorder = SessionRecorder(
             p=self.p, rig=self.rig, preset=preset, node=self.naming.node,
             resolve=self.naming.topic, stamp_epoch_ns=self.epoch_ns, logger=self.log,

@@ -42,7 +42,7 @@ class ScenarioPlayer:
                  | None = None) -> None:
         """Play ``scenario`` from now on, on the session's simulated clock: at each tick, once
         the rig has reached its time t, the scenario's parameter changes due by t are made
-        (``change``, recorded), its controller switch due by t is asked for
+        (``change``, recorded), its controller switch due by the next tick's time is asked for
         (``on_switch(law)``, recorded; what it returns, a confirmation with ``done()``, is
         held in ``switch_pending`` and a lockstep loop holds the tick's sample until it is
         done), and its set-points for t go in as commands (recorded as received), held until
