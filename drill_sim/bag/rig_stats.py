@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.stick_slip import severity_index, stuck
 from .errors import BagError
 
 # the quantities the metrics read (SI, named as in ``series.JOINT_FIELDS``)
@@ -122,7 +123,7 @@ class RigStats:
         self.w_min, self.w_max = min(self.w_min, float(w.min())), max(self.w_max, float(w.max()))
         self.t_min = min(self.t_min, float(time_s.min()))
         self.t_max = max(self.t_max, float(time_s.max()))
-        self.stuck += int(np.count_nonzero((w == 0.0) & (wob > 0.0)))
+        self.stuck += int(np.count_nonzero(stuck(w, wob)))
         self.bounce += int(np.count_nonzero(wob == 0.0))
 
     def problems(self) -> list[str]:
@@ -146,7 +147,7 @@ class RigStats:
         return {
             "duration_s": self.t_max - self.t_min,
             "samples": self.n,
-            "ssi": (self.w_max - self.w_min) / (2 * mean) if mean > 0 else math.inf,
+            "ssi": severity_index(self.w_max, self.w_min, mean),
             "stick_fraction": self.stuck / self.n,
             "bounce_fraction": self.bounce / self.n,
             "mean_bit_speed_rad_s": mean,

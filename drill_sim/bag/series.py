@@ -15,20 +15,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ..wire.rig_topics import JOINT_NAMES, JOINT_STATES
+from ..core.stick_slip import stuck
+from ..wire.rig_topics import JOINT_NAMES, JOINT_PLACES, JOINT_STATES
 from .bag import Bag, opened
 from .errors import BagError
 from .mcap_index import channel_chunks
 from .rig_stats import QUANTITIES, RigStats
 
 JOINT_STATE = JOINT_STATES.type_name
-# where each quantity sits in the node's joint_states (msg_docs/node.md): (array, joint index)
-JOINT_FIELDS = {
-    "top_drive_speed_rad_s": ("velocity", 0), "surface_torque_nm": ("effort", 0),
-    "hook_load_n": ("effort", 1), "bit_depth_m": ("position", 1),
-    "bit_speed_rad_s": ("velocity", 2), "tob_nm": ("effort", 2),
-    "hole_depth_m": ("position", 3), "rop_m_s": ("velocity", 3), "wob_n": ("effort", 3),
-}
+# the quantities of a rig series (the joint_states' angles are not among them), and where each
+# sits in the node's joint_states: (array, joint index), from the topics table
+JOINT_FIELDS = {name: JOINT_PLACES[name] for name in (
+    "top_drive_speed_rad_s", "surface_torque_nm", "hook_load_n", "bit_depth_m", "bit_speed_rad_s",
+    "tob_nm", "hole_depth_m", "rop_m_s", "wob_n")}
 # From the position array on, the rig's joint_states is 14 float64 slots: position[4], then a
 # uint32 count and 4 bytes of padding (one slot), velocity[4], another slot, effort[4].
 JOINT_VALUES_F64 = 14
@@ -76,7 +75,7 @@ class RigSeries:
     @property
     def stuck(self) -> np.ndarray:
         """Samples with the bit stuck: not rotating while pressed on the rock."""
-        return (self.bit_speed_rad_s == 0.0) & (self.wob_n > 0.0)
+        return stuck(self.bit_speed_rad_s, self.wob_n)
 
     def window(self, start_s: float | None, end_s: float | None) -> RigSeries:
         t = self.time_s - self.time_s[0] if self.time_s.size else self.time_s

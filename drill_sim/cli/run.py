@@ -7,7 +7,6 @@ compare before and after."""
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from datetime import datetime
 from pathlib import Path
@@ -17,6 +16,7 @@ import numpy as np
 from ..bag.errors import BagError
 from ..bag.series import RigSeries, rig_series
 from ..core import RPM, load_preset
+from ..core.stick_slip import severity_index
 from ..programs import program
 from ..session.diagnostics import drilling_regime
 from ..session.pacing import CATCH_UP_TICKS
@@ -185,7 +185,7 @@ def regime(series: RigSeries, stick_flag: bool = False) -> str:
     mean = float(np.mean(w))
     off = series.wob_n == 0.0
     return drilling_regime(
-        ssi=float((w.max() - w.min()) / (2 * mean)) if mean > 0 else math.inf,
+        ssi=severity_index(float(w.max()), float(w.min()), mean),
         stuck=bool(np.any(series.stuck)) or stick_flag,
         off_bottom_fraction=float(np.mean(off)), off_bottom_now=bool(off[-1]),
         top_drive_speed_rad_s=float(series.top_drive_speed_rad_s[-1]))

@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..core import RPM, Groups, NoSteadyDrilling, ParameterError, stability, steady_state
+from ..core import RPM, Groups, NoSteadyDrilling, ParameterError, steady_state
 from ..core.distributed import STRING_MODELS
 from ..core.figures import figures_line, key_figures
+from ..core.stability import stability
 from .case import OMEGA0_MAX, RPM_MAX, Case, add_model_arguments, resolve_case
 from .checks import in_range, integer, json_line, number, typed
 from .errors import UsageError

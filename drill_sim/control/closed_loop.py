@@ -33,11 +33,13 @@ from ..session import rules
 from ..session.parameter_table import specs
 from ..session.rig_session import RigSession
 from ..wire import cdr, rig_topics
+from . import LAWS, make_law
 from .evaluation import (
     LoopResult,
     LoopSettings,
     Scenario,
     ideal_measurement,
+    law_gains,
     law_top_drive,
     loop_result,
 )
@@ -111,17 +113,13 @@ def _close(session: RigSession, commands: _Commands, preset: Preset, scenario: S
            ) -> dict[str, np.ndarray]:
     rig = session.rig
     measure = _measure(settings)
-    gains = dict(settings.gains)
-    if settings.law not in ("kinematic", "off"):
-        gains.setdefault("torque_min_nm", drive.motor_torque_min_nm)
-        gains.setdefault("torque_max_nm", drive.motor_torque_max_nm)
+    gains = law_gains(settings, drive)
     z, j = pipe_impedance(preset), drive.top_drive_inertia_kg_m2
-    speed_law = settings.law == "kinematic"
+    speed_law = LAWS[settings.law].output_kind == "speed"        # the kinematic pass-through
     switch_k = 0 if speed_law else math.ceil(scenario.switch_on_s / h - 1e-9)
     session.emit(())                                  # the sample at t = 0, measured
     sample, reading = session.last[1], session.last[2]
     if speed_law:
-        from . import make_law
         law = make_law("kinematic", h, z, j, **gains)
         law.reset(float(speed_set[0]))
         output = law.bumpless_start(rig.commanded_speed_rad_s, measure(sample, reading))

@@ -14,8 +14,9 @@ import numpy as np
 
 from ..core import RPM, Preset, Rig, RigSample
 from ..core.parameters import ParameterError, check_number
+from ..core.stick_slip import severity_index
 from ..core.top_drive import TopDriveParameters
-from . import make_law
+from . import LAWS, make_law
 from .laws import Law, SurfaceMeasurement
 from .tuning import pipe_impedance
 
@@ -162,16 +163,21 @@ def law_top_drive(preset: Preset, law_name: str,
                   top_drive: TopDriveParameters | None) -> TopDriveParameters:
     """The drive a law runs on: kinematic for ``kinematic``, torque mode for the others."""
     base = preset.top_drive if top_drive is None else top_drive
-    mode = "kinematic" if law_name == "kinematic" else "torque"
-    return replace(base, top_drive_mode=mode)
+    return replace(base, top_drive_mode=LAWS[law_name].top_drive_mode)
+
+
+def law_gains(settings: LoopSettings, drive: TopDriveParameters) -> dict[str, float]:
+    """The law's gains, its torque limits those of the drive unless the gains say otherwise."""
+    gains = dict(settings.gains)
+    if LAWS[settings.law].limited_by_drive:
+        gains.setdefault("torque_min_nm", drive.motor_torque_min_nm)
+        gains.setdefault("torque_max_nm", drive.motor_torque_max_nm)
+    return gains
 
 
 def build_law(preset: Preset, settings: LoopSettings, drive: TopDriveParameters) -> Law:
     """The law at h, its torque limits those of the drive unless the gains say otherwise."""
-    gains = dict(settings.gains)
-    if settings.law not in ("kinematic", "off"):
-        gains.setdefault("torque_min_nm", drive.motor_torque_min_nm)
-        gains.setdefault("torque_max_nm", drive.motor_torque_max_nm)
+    gains = law_gains(settings, drive)
     return make_law(settings.law, settings.sample_period_s, pipe_impedance(preset),
                     drive.top_drive_inertia_kg_m2, **gains)
 
@@ -182,7 +188,7 @@ def loop_result(preset: Preset, scenario: Scenario, settings: LoopSettings,
     m = rig.metrics()
     torque = series["surface_torque_nm"][window_k:]
     window_s = m["duration_s"]
-    if settings.law == "kinematic":
+    if LAWS[settings.law].output_kind != "torque":
         saturated = math.nan
     else:
         out = series["law_output"][window_k:]
@@ -239,7 +245,7 @@ def sample_metrics(preset: Preset, series: Mapping[str, np.ndarray], window_star
            if drilled > 0.0 else math.nan)
     return LoopResult(
         law=law, scenario=scenario, sensor_profile=sensor_profile, string_model=string_model,
-        ssi=float((speed.max() - speed.min()) / (2.0 * mean)) if mean > 0 else math.inf,
+        ssi=severity_index(float(speed.max()), float(speed.min()), mean),
         stick_fraction=float(np.mean(np.asarray(series["stuck"])[w] > 0)),
         mean_rop_m_h=drilled / span * 3600.0 if span > 0 else math.nan,
         mean_bit_speed_rpm=mean / RPM, min_bit_speed_rpm=float(speed.min()) / RPM,

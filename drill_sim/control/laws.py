@@ -84,7 +84,11 @@ class Law:
 
     __slots__ = ("h_s", "impedance_nm_s_rad", "speed_set_rad_s", "top_drive_inertia_kg_m2")
     name: ClassVar[str] = ""
+    # what the law commands, and so the drive it runs on and the rig topic it publishes to
     output_kind: ClassVar[str] = "torque"
+    top_drive_mode: ClassVar[str] = "torque"
+    command_topic: ClassVar[str] = "~/cmd/top_drive_torque"
+    limited_by_drive: ClassVar[bool] = True       # its torque limits default to the drive's
     GAINS: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self, h_s: float, impedance_nm_s_rad: float,
@@ -117,6 +121,9 @@ class Kinematic(Law):
     __slots__ = ()
     name = "kinematic"
     output_kind = "speed"
+    top_drive_mode = "kinematic"
+    command_topic = "~/cmd/top_drive"
+    limited_by_drive = False
 
     def step(self, measurement: SurfaceMeasurement) -> float:
         return self.speed_set_rad_s
@@ -132,6 +139,7 @@ class Off(Law):
 
     __slots__ = ("torque_nm",)
     name = "off"
+    limited_by_drive = False
 
     def __init__(self, h_s: float, impedance_nm_s_rad: float,
                  top_drive_inertia_kg_m2: float) -> None:

@@ -34,10 +34,10 @@ class Supervisor:
 
     def build(self, law: str, gains: Mapping[str, float]) -> Law:
         """A law of these gains (ParameterError naming a bad one); nothing changes here."""
-        if law == "kinematic":
-            raise ParameterError("law = 'kinematic' is a speed pass-through, not a controller "
-                                 "of the motor torque: expected one of "
-                                 f"{', '.join(n for n in LAWS if n != 'kinematic')}")
+        if law in LAWS and LAWS[law].output_kind != "torque":
+            torque_laws = ", ".join(n for n, c in LAWS.items() if c.output_kind == "torque")
+            raise ParameterError(f"law = {law!r} is a speed pass-through, not a controller "
+                                 f"of the motor torque: expected one of {torque_laws}")
         return make_law(law, self.h_s, self.z, self.j, **dict(gains))
 
     def replace_law(self, law: str, gains: Mapping[str, float]) -> None:

@@ -14,6 +14,7 @@ import numpy as np
 
 from . import kernel as kn
 from .parameters import Scales
+from .stick_slip import severity_index
 
 
 @dataclass(frozen=True)
@@ -51,10 +52,9 @@ class Metrics:
             nan = math.nan
             return cls(0.0, *([nan] * 20))
         mean_omega = acc[kn.A_OMEGA] / time
-        spread = acc[kn.A_OMEGA_MAX] - acc[kn.A_OMEGA_MIN]
         return cls(
             duration=time,
-            ssi=spread / (2.0 * mean_omega) if mean_omega > 0.0 else math.inf,
+            ssi=severity_index(acc[kn.A_OMEGA_MAX], acc[kn.A_OMEGA_MIN], mean_omega),
             stick_fraction=acc[kn.A_STICK_TIME] / time,
             bounce_fraction=acc[kn.A_BOUNCE_TIME] / time,
             mean_bit_speed=mean_omega,

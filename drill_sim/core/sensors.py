@@ -43,7 +43,9 @@ from .sensor_profile import (
     SensorProfile,
     load_profile,
 )
+from .stick_slip import severity_index
 
+_severity_index = nb.njit(cache=True)(severity_index)
 SEVERITY_MAX = 10.0          # the severity shown when the bit's mean speed over a window is <= 0
 NOISE_BLOCK = 4096           # normal deviates drawn at a time, per channel
 _SAMPLE_FIELDS = CHANNELS[:-1]
@@ -241,8 +243,7 @@ def _measure_kernel(t, x, par, st, ist, ring, noise, win, window_s, out, fresh):
         win[W_MAX] = w
     elif t >= win[W_END] - 1e-9:
         mean = win[W_SUM] / win[W_N] if win[W_N] > 0 else w
-        sev = (win[W_MAX] - win[W_MIN]) / (2.0 * mean) if mean > 0.0 else SEVERITY_MAX
-        win[W_VALUE] = min(sev, SEVERITY_MAX)
+        win[W_VALUE] = min(_severity_index(win[W_MAX], win[W_MIN], mean), SEVERITY_MAX)
         win[W_END] += window_s * (1.0 + math.floor((t - win[W_END]) / window_s))
         win[W_MIN] = w
         win[W_MAX] = w

@@ -49,7 +49,7 @@ from .stopping import init_stoppable
 from .topics import rclpy_qos
 
 NODE_NAME = "drill_sim_controller"
-CONTROL_LAWS = tuple(n for n in LAWS if n != "kinematic")
+CONTROL_LAWS = tuple(n for n, law in LAWS.items() if law.output_kind == "torque")
 DEFAULT_TORQUE_LIMIT_NM = 60e3            # the base drive's rating; set to the rig's limits
 MAX_CATCH_UP = 100                        # law steps for one sample after a gap in the stamps
 PROVISIONAL_PERIOD_S = 1e-3               # gains are checked against it until the rig answers

@@ -30,15 +30,24 @@ from pathlib import Path
 
 import numpy as np
 
+from ..control import LAWS
 from ..control.evaluation import LoopSettings, Scenario, law_top_drive
 from ..control.tuning import pipe_impedance
 from ..core import RPM, Preset
 from ..core.parameters import ParameterError
+from ..core.rig import REGIME_STUCK
 from ..programs import program
+from ..wire.rig_topics import JOINT_PLACES, topic
 
 NS = "/drill_sim_control"
 RIG = f"{NS}/drill_sim"
 SETPOINT = f"{NS}/speed_setpoint"        # this process's stamped set-points to the controller
+
+
+def at_rig(name: str) -> str:
+    """The full name of the rig's topic or service ``name`` (``~/...``, from the topics table)."""
+    return topic(name).under(RIG)
+
 SERIES = ("bit_speed_rad_s", "stuck", "surface_torque_nm", "motor_torque_nm", "bit_depth_m",
           "top_drive_angle_rad", "wob_n", "top_drive_speed_rad_s")
 
@@ -77,7 +86,7 @@ def rig_command(preset: Preset, scenario: Scenario, settings: LoopSettings) -> l
     if scenario.start_rpm is not None:            # a steady start away from the set-point
         speed = scenario.start_rpm * RPM
     drive = law_top_drive(preset, settings.law, settings.top_drive)
-    topic = "cmd/top_drive" if settings.law == "kinematic" else "cmd/top_drive_torque"
+    topic = LAWS[settings.law].command_topic.removeprefix("~/")
     params = {"preset": preset.name, "publish_clock": "true", "lockstep": "true",
               "lockstep_topics": f"[{topic}, cmd/hook_load]", "start_paused": "true",
               "lockstep_timeout_s": "3600.0",
@@ -102,7 +111,7 @@ def controller_command(preset: Preset, scenario: Scenario, settings: LoopSetting
     None for the kinematic row."""
     if user_command:
         return [*shlex.split(user_command), "--ros-args", "-r", f"__ns:={NS}"]
-    if settings.law == "kinematic":
+    if LAWS[settings.law].output_kind == "speed":        # the set-point goes to the rig
         return None
     speed_set, _ = tick_commands(preset, scenario, settings)
     drive = law_top_drive(preset, settings.law, settings.top_drive)
@@ -158,10 +167,10 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
     def put(key: str, m, value: float) -> None:
         data[key][stamp(m)] = value
 
-    kinematic = settings.law == "kinematic"
+    kinematic = LAWS[settings.law].output_kind == "speed"
     speed_pub = node.create_publisher(
-        TwistStamped, f"{RIG}/cmd/top_drive" if kinematic else SETPOINT, depth_out)
-    hook_pub = node.create_publisher(WrenchStamped, f"{RIG}/cmd/hook_load", depth_out)
+        TwistStamped, at_rig("~/cmd/top_drive") if kinematic else SETPOINT, depth_out)
+    hook_pub = node.create_publisher(WrenchStamped, at_rig("~/cmd/hook_load"), depth_out)
     answer = TwistStamped()
     answer.header.frame_id = "top_drive"
     load = WrenchStamped()
@@ -210,21 +219,21 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
             return
         speed_pub.publish(answer)
 
-    node.create_subscription(TwistStamped, f"{RIG}/bit/twist", on_bit, depth)
-    node.create_subscription(UInt8, f"{RIG}/bit/regime", lambda m: data["stuck"].__setitem__(
-        len(data["stuck"]), float(m.data == 1)), depth)
-    node.create_subscription(WrenchStamped, f"{RIG}/top_drive/wrench", lambda m: put(
+    node.create_subscription(TwistStamped, at_rig("~/bit/twist"), on_bit, depth)
+    node.create_subscription(UInt8, at_rig("~/bit/regime"), lambda m: data["stuck"].__setitem__(
+        len(data["stuck"]), float(m.data == REGIME_STUCK)), depth)
+    node.create_subscription(WrenchStamped, at_rig("~/top_drive/wrench"), lambda m: put(
         "surface_torque_nm", m, m.wrench.torque.z), depth)
-    node.create_subscription(WrenchStamped, f"{RIG}/top_drive/motor_wrench", lambda m: put(
+    node.create_subscription(WrenchStamped, at_rig("~/top_drive/motor_wrench"), lambda m: put(
         "motor_torque_nm", m, m.wrench.torque.z), depth)
-    node.create_subscription(WrenchStamped, f"{RIG}/bit/wrench", lambda m: put(
+    node.create_subscription(WrenchStamped, at_rig("~/bit/wrench"), lambda m: put(
         "wob_n", m, m.wrench.force.z), depth)
 
     def on_joints(m) -> None:
-        put("bit_depth_m", m, m.position[1])
-        put("top_drive_angle_rad", m, m.position[0])
-        put("top_drive_speed_rad_s", m, m.velocity[0])
-    node.create_subscription(JointState, f"{RIG}/joint_states", on_joints, depth)
+        for name in ("bit_depth_m", "top_drive_angle_rad", "top_drive_speed_rad_s"):
+            array, j = JOINT_PLACES[name]
+            put(name, m, getattr(m, array)[j])
+    node.create_subscription(JointState, at_rig("~/joint_states"), on_joints, depth)
     env = dict(os.environ)
     try:
         procs.append(subprocess.Popen(rig_command(preset, scenario, settings), env=env,
@@ -233,16 +242,16 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
         ctl = controller_command(preset, scenario, settings, user_command)
         if ctl is not None:
             procs.append(subprocess.Popen(ctl, env=env, stdout=subprocess.DEVNULL))
-        cmd_topic = f"{RIG}/cmd/top_drive" if ctl is None else f"{RIG}/cmd/top_drive_torque"
-        pause = node.create_client(SetBool, f"{RIG}/pause")
+        cmd_topic = at_rig("~/cmd/top_drive") if ctl is None else at_rig("~/cmd/top_drive_torque")
+        pause = node.create_client(SetBool, at_rig("~/pause"))
         end = time.monotonic() + 60.0
         while not (pause.service_is_ready() and node.count_publishers(cmd_topic) > 0
                    and hook_pub.get_subscription_count() > 0
                    and (ctl is None or user_command or speed_pub.get_subscription_count() > 0)
                    and (switch_k is None or switcher.service_is_ready())
-                   and node.count_publishers(f"{RIG}/joint_states") > 0
+                   and node.count_publishers(at_rig("~/joint_states")) > 0
                    and (ctl is None or node.count_subscribers(
-                       f"{RIG}/measured/top_drive/motor_wrench") > 0)):
+                       at_rig("~/measured/top_drive/motor_wrench")) > 0)):
             _check_alive(procs)
             if time.monotonic() > end:
                 raise OSError("the rig and the controller did not connect within 60 s")

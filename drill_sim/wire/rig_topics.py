@@ -173,6 +173,19 @@ SERVICES = of(SERVICE)
 COMMAND_BY_RULE = {t.command: t for t in COMMANDS}
 
 
+def _joint_places() -> dict[str, tuple[str, int]]:
+    """Where each quantity sits in ``~/joint_states``: (array, joint index), read from the
+    table's fields; the ROP, shown on two joints, at the bit's axial joint (the last)."""
+    places = {}
+    for f in JOINT_STATES.fields:
+        array, j = f.message.rstrip("]").split("[")
+        places[f.sample] = (array, int(j))
+    return places
+
+
+JOINT_PLACES = _joint_places()
+
+
 def published(with_clock: bool) -> tuple[RigTopic, ...]:
     """What the node publishes every tick, in publishing order (``/clock`` first)."""
     return ((CLOCK_TOPIC,) if with_clock else ()) + OUTPUTS

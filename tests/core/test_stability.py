@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from drill_sim.core import Groups, NoSteadyDrilling, Simulator, stability, steady_state
-from drill_sim.core.stability import characteristic
+from drill_sim.core import Groups, NoSteadyDrilling, Simulator, steady_state
+from drill_sim.core.stability import characteristic, stability
 
 
 def test_steady_state_in_si_matches_model_md(base, base_commands):

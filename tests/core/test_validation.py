@@ -8,8 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from drill_sim.core import Groups, Simulator, stability, steady_state
+from drill_sim.core import Groups, Simulator, steady_state
 from drill_sim.core.kernel import REGIME_STUCK
+from drill_sim.core.stability import stability
 
 
 def _stationary_metrics(groups, w0, omega0, transient=600.0, window=600.0, dt=None):

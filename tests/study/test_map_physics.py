@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from drill_sim.cli.main import main
-from drill_sim.core import Metrics, load_preset, stability, steady_state
+from drill_sim.core import Metrics, load_preset, steady_state
+from drill_sim.core.stability import stability
 from drill_sim.study import axial_neutral_speed, axial_threshold, metric_row
 
 GROUPS = "n=4,psi=13.73,lambda=6.84,beta={beta}"
