@@ -17,7 +17,8 @@ from dataclasses import dataclass, replace
 
 from ..core import DEFAULT_DT, NoSteadyDrilling, steady_state
 from ..core.distributed import STRING_MODELS, geometry_waves
-from ..core.simulator import max_step
+from ..core.parameters import ParameterError
+from ..core.simulator import max_step, resolves
 from ..core.top_drive import MODES, TopDriveParameters
 from ..session.parameter_table import PERTURBATION_RANGE
 from ..study.single import RunSettings, default_start
@@ -136,19 +137,25 @@ def resolve_drive(args: argparse.Namespace, case: Case) -> Drive | None:
         if value is not None:
             values[field] = factor * in_range("--" + dest.replace("_", "-"), value, low, high,
                                               unit=unit, what=what)
-    low = values.get("motor_torque_min_nm", base.motor_torque_min_nm)
-    high = values.get("motor_torque_max_nm", base.motor_torque_max_nm)
-    if not low < high:
-        raise UsageError(f"--motor-torque-min-knm {low / 1e3:g}: not below the largest motor "
-                         f"torque {high / 1e3:g} kN m; expected a smallest motor torque below it")
-    top_drive = replace(base, top_drive_mode="kinematic", **values)
-    if mode == "speed" and top_drive.drive_kp_nm_s_rad is None:
-        raise UsageError(f"--top-drive-mode speed: preset {case.preset.name!r} has no string "
-                         "geometry for the default gain 50 Z; expected --drive-kp")
+    try:                               # the drive's own rules (limits, gains) decide
+        top_drive = replace(base, top_drive_mode=mode, **values)
+    except ParameterError as exc:
+        raise UsageError(_drive_refusal(str(exc), args, case)) from None
     torque = None if args.motor_torque_knm is None else 1e3 * in_range(
         "--motor-torque-knm", args.motor_torque_knm, -MOTOR_TORQUE_KNM, MOTOR_TORQUE_KNM,
         unit="kN m", what="a motor torque command")
-    return Drive(replace(top_drive, top_drive_mode=mode), torque)
+    return Drive(top_drive, torque)
+
+
+def _drive_refusal(words: str, args: argparse.Namespace, case: Case) -> str:
+    """The drive's refusal, naming the option that set what it refuses."""
+    if words.startswith("drive_kp_nm_s_rad = None"):
+        return (f"--top-drive-mode speed: preset {case.preset.name!r} has no string geometry "
+                f"for the default gain 50 Z; expected --drive-kp ({words})")
+    for dest, *_, field in DRIVE_OPTIONS:
+        if words.startswith(field + " ") and getattr(args, dest) is not None:
+            return f"--{dest.replace('_', '-')} {getattr(args, dest):g}: {words}"
+    return f"the top drive's options: {words}"
 
 
 def resolve_timing(args: argparse.Namespace, case: Case, default_s: float,
@@ -201,8 +208,8 @@ def run_settings(case: Case, timing: Timing, start: str | None, gap: float,
     if drive is not None and drive.top_drive.top_drive_mode != "kinematic":
         rig = case.preset.rig
         groups = drive.top_drive.groups(rig.scales, rig.bha_inertia_kg_m2)
-        limit = max_step(case.groups, groups)
-        if timing.dt / t_star > limit * (1.0 + 1e-12):
+        if not resolves(case.groups, groups, timing.dt / t_star):
+            limit = max_step(case.groups, groups)
             raise UsageError(f"--dt {timing.dt:.4g} s cannot resolve the top drive's fastest "
                              f"mode{where}: expected at most {limit * t_star:.4g} s, or a "
                              "heavier --top-drive-inertia")
@@ -210,7 +217,7 @@ def run_settings(case: Case, timing: Timing, start: str | None, gap: float,
             t0 = steady_state(case.groups, case.w0, case.omega0).t0
             if waves is not None:           # the torque at the top: the dashpots' share too
                 t0 += float(waves.torsion.dashpot.sum()) * case.omega0
-            if not groups.t_min <= t0 <= groups.t_max:
+            if not groups.holds(t0):
                 c = rig.torsional_stiffness_nm_per_rad
                 raise UsageError(f"--start steady{where}: steady drilling needs a motor torque of "
                                  f"{t0 * c / 1e3:.4g} kN m, beyond the drive's limits "

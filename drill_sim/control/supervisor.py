@@ -5,9 +5,11 @@ adapter around it, and the offline loop and tests use it directly.
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping
 
 from ..core.parameters import ParameterError, check_number
+from ..core.top_drive import DEFAULT_TORQUE_LIMIT_NM
 from . import LAWS, make_law
 from .laws import Law, SurfaceMeasurement
 
@@ -91,3 +93,24 @@ class Supervisor:
                "windup_fraction": self.wound_up / n if n else 0.0}
         self.samples = self.saturated = self.wound_up = 0
         return out
+
+
+def law_gain_defaults(law: str, impedance_nm_s_rad: float, top_drive_inertia_kg_m2: float
+                      ) -> dict[str, float]:
+    """Every gain of ``law`` with its default as a number, as a controller offers them before
+    it is tuned: K_p 50 Z, K_i 5 J_TD where the law leaves them to Z and J_TD, and the base
+    drive's torque rating (±60 kN·m) as limits."""
+    sig = inspect.signature(LAWS[law].__init__)
+    out = {}
+    for name in LAWS[law].GAINS:
+        value = sig.parameters[name].default
+        if name == "kp_nm_s_rad" and value is None:
+            value = 50.0 * impedance_nm_s_rad
+        elif name == "ki_nm_rad" and value is None:
+            value = 5.0 * top_drive_inertia_kg_m2
+        elif name == "torque_min_nm":
+            value = -DEFAULT_TORQUE_LIMIT_NM
+        elif name == "torque_max_nm":
+            value = DEFAULT_TORQUE_LIMIT_NM
+        out[name] = float(value)
+    return out

@@ -93,7 +93,7 @@ class StringSimulator(Simulator):
         x = self._x
         x[kn.X_TS] = self._t.fill_steady(st.t0, omega0)
         d = self.drive
-        if d.mode != "kinematic" and not d.t_min <= x[kn.X_TS] <= d.t_max:
+        if not d.holds(x[kn.X_TS]):
             raise ParameterError(f"steady drilling needs a motor torque of {x[kn.X_TS]:.4g} C, "
                                  f"outside the drive's limits [{d.t_min:.4g}, {d.t_max:.4g}] C")
         x[kn.X_TM] = x[kn.X_TREF] = x[kn.X_DRIVE_I] = self._c[kn.C_T_CMD] = x[kn.X_TS]

@@ -14,7 +14,14 @@ from . import kernel as kn
 from .distributed import check_string_model, geometry_waves
 from .distributed_simulator import StringSimulator
 from .parameters import ParameterError, RigParameters, StringGeometry, check_number
-from .simulator import DEFAULT_DT, STEPS_PER_PERIOD, Simulator, fastest_period, max_step
+from .simulator import (
+    DEFAULT_DT,
+    STEPS_PER_PERIOD,
+    Simulator,
+    fastest_period,
+    max_step,
+    resolves,
+)
 from .stability import SteadyState, steady_state
 from .top_drive import DriveGroups, TopDriveParameters
 
@@ -59,8 +66,8 @@ class RigSample(NamedTuple):
 def _check_step(dt_s: float, params: RigParameters, top_drive: TopDriveParameters) -> None:
     """Refuse a step that cannot resolve the fastest mode of these parameters, in SI."""
     drive = top_drive.groups(params.scales, params.bha_inertia_kg_m2)
-    limit_s = max_step(params.groups, drive) * params.scales.time_s
-    if dt_s > limit_s * (1.0 + 1e-12):
+    if not resolves(params.groups, drive, dt_s / params.scales.time_s):
+        limit_s = max_step(params.groups, drive) * params.scales.time_s
         period_s = fastest_period(params.groups, drive) * params.scales.time_s
         raise ParameterError(
             f"dt_s = {dt_s:g} s cannot resolve the fastest mode of these parameters (period "

@@ -47,6 +47,12 @@ def max_step(groups: Groups, drive: DriveGroups | None = None) -> float:
     return min(0.05, fastest_period(groups, drive) / STEPS_PER_PERIOD)
 
 
+def resolves(groups: Groups, drive: DriveGroups | None, dt: float) -> bool:
+    """Whether step ``dt`` [t*] resolves the fastest mode (``max_step``, to round-off): the one
+    test every refusal of a step uses (the simulators, ``Rig``, the command line)."""
+    return dt <= max_step(groups, drive) * (1.0 + 1e-12)
+
+
 def surface_nodes(groups: Groups, dt: float) -> int:
     """Nodes per sector: the power of two that makes a node about one step of rotation at omega ~ 1.
 
@@ -92,7 +98,7 @@ class Simulator:
         self.start_at_rest()
 
     def _check_step(self, drive: DriveGroups) -> None:
-        if self.dt > max_step(self.groups, drive) * (1.0 + 1e-12):
+        if not resolves(self.groups, drive, self.dt):
             g = self.groups
             raise ParameterError(
                 f"dt = {self.dt:g} t* cannot resolve the fastest mode: its period is "
@@ -106,7 +112,7 @@ class Simulator:
         perturbation = check_number("perturbation", perturbation, low=-1.0)
         st = steady_state(self.groups, w0, omega0)
         d = self.drive
-        if d.mode != "kinematic" and not d.t_min <= st.t0 <= d.t_max:
+        if not d.holds(st.t0):
             raise ParameterError(f"steady drilling needs a motor torque of {st.t0:.4g} C, outside "
                                  f"the drive's limits [{d.t_min:.4g}, {d.t_max:.4g}] C")
         self.set_commands(w0, omega0)

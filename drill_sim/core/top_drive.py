@@ -39,7 +39,7 @@ def check_mode(mode: object) -> str:
 def _check_limits(t_min: float, t_max: float, unit: str) -> None:
     if not t_min < t_max:
         raise ParameterError(f"motor_torque_min{unit} = {t_min!r} is out of range: expected "
-                             f"< motor_torque_max{unit} = {t_max!r}")
+                             f"below motor_torque_max{unit} = {t_max!r}")
 
 
 @dataclass(frozen=True)
@@ -125,6 +125,11 @@ class DriveGroups:
         for name in ("lag", "kp", "ki"):
             object.__setattr__(self, name, check_number(name, getattr(self, name),
                                                         low_inclusive=True))
+
+    def holds(self, torque: float) -> bool:
+        """Whether the drive can hold the string's top torque ``torque`` [C] (a steady start's):
+        any torque in kinematic mode, else one within [t_min, t_max]."""
+        return self.mode == "kinematic" or self.t_min <= torque <= self.t_max
 
     @property
     def code(self) -> int:

@@ -15,7 +15,6 @@ at run time, validated, without a bump; ``/diagnostics`` reports law, saturation
 
 from __future__ import annotations
 
-import inspect
 import math
 import sys
 import time
@@ -38,8 +37,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from ..control import LAWS
-from ..control.laws import SurfaceMeasurement
-from ..control.supervisor import Supervisor
+from ..control.sampled_loop import SETPOINT, SPEED, SampledLoop, controller_status
+from ..control.supervisor import Supervisor, law_gain_defaults
 from ..control.tuning import pipe_impedance
 from ..core.parameters import ParameterError
 from ..wire import rig_topics
@@ -50,8 +49,6 @@ from .topics import rclpy_qos
 
 NODE_NAME = "drill_sim_controller"
 CONTROL_LAWS = tuple(n for n, law in LAWS.items() if law.output_kind == "torque")
-DEFAULT_TORQUE_LIMIT_NM = 60e3            # the base drive's rating; set to the rig's limits
-MAX_CATCH_UP = 100                        # law steps for one sample after a gap in the stamps
 PROVISIONAL_PERIOD_S = 1e-3               # gains are checked against it until the rig answers
 RATE_QUERY_PERIOD_S = 0.1                 # the rig's rate_hz is asked this often until known
 HAND_BACK_TIMEOUT_S = 2.0                 # stopping: how long to wait for the rig's speed mode
@@ -70,24 +67,6 @@ def rig_topic(name: str) -> rig_topics.RigTopic:
     except KeyError:
         raise SystemExit(f"{NODE_NAME}: the rig offers no {name} in this build: expected the "
                          "top drive's topics (msg_docs/node.md)") from None
-
-
-def law_gain_defaults(law: str, impedance: float, inertia: float) -> dict[str, float]:
-    """Every gain of ``law`` with its default as a number (50 Z, 5 J_TD, ±60 kN·m limits)."""
-    sig = inspect.signature(LAWS[law].__init__)
-    out = {}
-    for name in LAWS[law].GAINS:
-        value = sig.parameters[name].default
-        if name == "kp_nm_s_rad" and value is None:
-            value = 50.0 * impedance
-        elif name == "ki_nm_rad" and value is None:
-            value = 5.0 * inertia
-        elif name == "torque_min_nm":
-            value = -DEFAULT_TORQUE_LIMIT_NM
-        elif name == "torque_max_nm":
-            value = DEFAULT_TORQUE_LIMIT_NM
-        out[name] = float(value)
-    return out
 
 
 class ControllerNode(Node):
@@ -122,12 +101,7 @@ class ControllerNode(Node):
         if p["inputs"] not in ("measured", "exact"):
             raise SystemExit(f"{NODE_NAME}: inputs = {p['inputs']!r}: expected measured or exact")
         use = 1 if p["inputs"] == "measured" else 2
-        # a slot per stamp: speed, motor and surface torque, and (setpoint_lockstep) the
-        # set-point stamped for that sample
-        self._slot_size = 4 if p["setpoint_lockstep"] else 3
-        self._pending: dict[int, list[float | None]] = {}
-        self._last: SurfaceMeasurement | None = None
-        self._index = {}
+        self.loop = SampledLoop(with_setpoint=p["setpoint_lockstep"])
         for i, entry in enumerate(INPUTS):
             t = rig_topic(entry[use])
             msg_type = TwistStamped if entry[0] == "speed" else WrenchStamped
@@ -316,8 +290,8 @@ class ControllerNode(Node):
     # ---- the loop -----------------------------------------------------------------------
     def _on_setpoint(self, msg: TwistStamped) -> None:
         speed = msg.twist.angular.z
-        if self._slot_size == 4:              # applied at the sample with its stamp
-            self._on_input(3, msg)
+        if self.loop.size == 4:               # applied at the sample with its stamp
+            self._on_input(SETPOINT, msg)
         elif math.isfinite(speed):
             self.core.set_speed(speed)
         else:
@@ -325,51 +299,21 @@ class ControllerNode(Node):
 
     def _on_input(self, i: int, msg) -> None:
         stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        value = msg.twist.angular.z if i in (0, 3) else msg.wrench.torque.z
-        slot = self._pending.get(stamp)
+        value = msg.twist.angular.z if i in (SPEED, SETPOINT) else msg.wrench.torque.z
+        slot = self.loop.put(stamp, i, value)
         if slot is None:
-            if len(self._pending) > 16:              # an input that never came: forget it
-                for old in sorted(self._pending)[:-8]:
-                    del self._pending[old]
-            slot = self._pending[stamp] = [None] * self._slot_size
-        slot[i] = value
-        if None in slot:
             return
-        del self._pending[stamp]
-        for old in [s for s in self._pending if s < stamp]:
-            del self._pending[old]
         if not self._period_known:            # kept until the rig says its rate
             self._deferred = (msg.header.stamp, slot)
             return
         self._sample(msg.header.stamp, slot)
 
     def _sample(self, stamp_msg, slot: list) -> None:
-        """One complete sample (speed, motor torque, surface torque[, set-point]): step the
-        law and publish its command stamped with the sample's stamp."""
+        """One complete sample: step the law, publish its command stamped with the sample's."""
         stamp = stamp_msg.sec * 1_000_000_000 + stamp_msg.nanosec
-        speed, motor, surface = slot[:3]
-        if not all(math.isfinite(v) for v in slot):
-            self.get_logger().warn(f"sample at {stamp * 1e-9:.3f} s skipped: non-finite input")
-            return
-        if self._slot_size == 4:                     # this sample's set-point, before its step
-            self.core.set_speed(slot[3])
-        m = SurfaceMeasurement(stamp * 1e-9, speed, motor, surface)
-        if self._last is not None and m.time_s == self._last.time_s:
-            if self.core.last_output is not None and self.core.enabled:   # a tick published
-                self._publish(stamp_msg, self.core.last_output)           # again: same answer
-            return
-        # The law runs on sim time: when the rig skipped ticks (real time on a busy machine)
-        # the law is stepped once per period h of the gap on measurements interpolated
-        # linearly from the previous sample, so its filters, derivative and integral keep
-        # their time and see no jump (at most MAX_CATCH_UP steps).
-        last, self._last = self._last, m
-        periods = 1 if last is None else round((m.time_s - last.time_s) / self.core.h_s)
-        periods = min(max(periods, 1), MAX_CATCH_UP)
-        for k in range(1, periods):
-            f = k / periods
-            self.core.step(SurfaceMeasurement(*(a + f * (b - a) for a, b in zip(last, m,
-                                                                                strict=True))))
-        out = self.core.step(m)
+        out, skipped = self.loop.step(self.core, stamp, slot)
+        if skipped:
+            self.get_logger().warn(skipped)
         if out is not None:
             self._publish(stamp_msg, out)
 
@@ -380,15 +324,8 @@ class ControllerNode(Node):
 
     def _diagnose(self) -> None:
         w = self.core.take_window()
-        level, text = DiagnosticStatus.OK, "controlling"
-        if not self._period_known:
-            level, text = DiagnosticStatus.WARN, f"waiting for {self.rig}'s rate_hz"
-        elif not self.core.enabled:
-            text = "disabled"
-        elif w["samples"] == 0:
-            level, text = DiagnosticStatus.WARN, "no samples: the rig's inputs are not arriving"
-        elif w["saturation_fraction"] > 0.5 or w["windup_fraction"] > 0.5:
-            level, text = DiagnosticStatus.WARN, "output saturated"
+        warn, text = controller_status(self.core, w, self._period_known, self.rig)
+        level = DiagnosticStatus.WARN if warn else DiagnosticStatus.OK
         law = self.core.law
         values = {"law": law.name, "enabled": str(self.core.enabled),
                   "sample_period_s": f"{self.core.h_s:.9g}" if self._period_known else "",

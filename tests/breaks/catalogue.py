@@ -71,6 +71,12 @@ BREAKS: tuple[Break, ...] = (
         "tests/core/test_sensors.py::"
         "test_stick_slip_severity_divides_by_the_mean_not_the_mid_range"),
     # ---- laws and supervisor -------------------------------------------------------------
+    one("a gap in the stamps caught up on the new reading, not interpolated",
+        CONTROL + "sampled_loop.py", "            f = k / periods\n", "            f = 1.0\n",
+        "tests/control/test_sampled_loop.py"),
+    one("a tick seen again stepped again", CONTROL + "sampled_loop.py",
+        "if last is not None and m.time_s == last.time_s:", "if False:",
+        "tests/control/test_sampled_loop.py"),
     one("PI without conditional integration (integral only clamped)", CONTROL + "laws.py",
         "        if p + q > self.torque_max_nm and error_rad_s > 0.0:\n"
         "            q = max(self.q_nm, self.torque_max_nm - p)\n"

@@ -270,7 +270,7 @@ def test_speed_mode_is_the_drive_pi_on_the_set_point(ros):
     (["top_drive_inertia_kg_m2:=-5.0"], "top_drive_inertia_kg_m2 = -5.0: expected a finite "
                                         "number from 1 to 100000 kg m^2"),
     (["motor_torque_max_nm:=0.0", "motor_torque_min_nm:=0.0"],
-     "motor_torque_min_nm = 0.0 is out of range: expected < motor_torque_max_nm = 0.0"),
+     "motor_torque_min_nm = 0.0 is out of range: expected below motor_torque_max_nm = 0.0"),
 ])
 def test_a_bad_top_drive_parameter_stops_the_node_with_one_line(ros, params, fragment):
     args = [a for p in params for a in ("-p", p)]
