@@ -27,24 +27,18 @@ Memory is fixed: the ring buffers are sized at construction; nothing is allocate
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
 from . import kernel as kn
+from .bit_rock import REGIME_STUCK, _bit_rock_law, _surface_at, _sweep
 from .kernel import (
     EVENT_MARGIN,
     MAX_SPLITS,
-    REGIME_STUCK,
     _accumulate,
-    _bit_rock_law,
-    _blade_height,
     _drive_step,
-    _first_swept_node,
     _load_drive,
     _store_drive,
-    _surface_at,
 )
 
 # extra float state (after the lumped kernel's X_*, which keep their meaning; X_TS is the
@@ -180,21 +174,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, toff, tbuf, az, an, af, ac, a
                 break
             regime, w, t, g, delta = regime_new, w_new, t_new, g_new, delta_new
             u_new = u_m + h2 * v_new
-            k_new = np.int64(math.floor(phi_new * inv_dth))
-            if k_new > k_last:
-                dphi = phi_new - phi
-                for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
-                    uc = _blade_height(kk * dth, phi, dphi, u, u_new)
-                    jj = kk & mask
-                    s_behind = surf[jj]
-                    if uc > s_behind:
-                        surf[jj] = uc
-                        if uc > hole:
-                            hole = uc
-                k_last = k_new
-            elif k_new < k_last:
-                k_last = k_new
-                s_behind = surf[k_new & mask]
+            k_last, s_behind, hole = _sweep(surf, mask, n_nodes, dth, inv_dth, k_last, s_behind,
+                                            hole, phi, phi_new, u, u_new)
             om_bar, v_bar = 0.5 * (om + om_new), 0.5 * (v + v_new)
             a = _accumulate(a, hs, regime, om_bar, v_bar, w, t, ts_top, 0.0)
             damp_r += hs * tc[mt - 1] * (om + h2 * dom) * om_bar

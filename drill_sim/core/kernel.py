@@ -8,19 +8,20 @@ switches of the laws that it locates):
    (``_drive_step``), its end-of-step speed under the motor torque against the string
    torque phi_td_m - phi_m, the PI's P term implicit, its limits clamping the motor torque;
 2. evaluate the depth of cut delta = u_m - S(phi_m) on the rock surface left by earlier passes
-   (``_surface_at``);
+   (``bit_rock._surface_at``);
 3. solve the set-valued laws of the model contract (section 2.2, msg_docs/model.md) *implicitly*
-   for the end-of-step velocities (``_bit_rock_law``): the wear-flat factor g from the sign of v+
-   (``_contact_law``), stick from the sign of omega+ and the breakaway torque
-   (``_breakaway_torque``), the rock reaction from the sign of v+ while stuck
-   (``_stick_reaction``); each is a one-dimensional complementarity problem solved exactly by
-   trying its branches, so no law is ever regularised; then the drawworks' hoisting-speed limit
-   (``_hoist_limit``). If a law switches inside the step (the bit stops turning, breaks away,
-   its wear flats lift off or land, it leaves the rock or lands), ``_bit_rock_law`` says where,
-   and the step is taken in parts split there (``_located_step``);
+   for the end-of-step velocities (``bit_rock._bit_rock_law``, shared with the distributed
+   kernel): the wear-flat factor g from the sign of v+ (``_contact_law``), stick from the sign
+   of omega+ and the breakaway torque (``_breakaway_torque``), the rock reaction from the sign
+   of v+ while stuck (``_stick_reaction``); each is a one-dimensional complementarity problem
+   solved exactly by trying its branches, so no law is ever regularised; then the drawworks'
+   hoisting-speed limit (``_hoist_limit``). If a law switches inside the step (the bit stops
+   turning, breaks away, its wear flats lift off or land, it leaves the rock or lands),
+   ``_bit_rock_law`` says where, and the step is taken in parts split there
+   (``_located_step``);
 4. drift the second half with the new velocities and let the blades sweep the surface:
-   S(theta) <- max(S(theta), u) at every grid node passed (``_first_swept_node``,
-   ``_blade_height``); add the step to the window integrals (``_accumulate``).
+   S(theta) <- max(S(theta), u) at every grid node passed (``bit_rock._sweep``, shared too);
+   add the step to the window integrals (``_accumulate``).
 
 The top drive's limits (saturation, rate limit) are clamps of its motor torque, not laws of the
 bit: a clamp that engages inside a step is not located. In kinematic mode (the default) the
@@ -38,6 +39,11 @@ import math
 
 import numpy as np
 from numba import njit
+
+from .bit_rock import REGIME_OFF_BOTTOM as REGIME_OFF_BOTTOM  # the regimes, read here as kn.*
+from .bit_rock import REGIME_ROTATING as REGIME_ROTATING
+from .bit_rock import REGIME_STUCK as REGIME_STUCK
+from .bit_rock import _bit_rock_law, _surface_at, _sweep  # the bit on the rock, shared
 
 # float state x
 X_TAU, X_U, X_V, X_PHI, X_OMEGA, X_PHI_TD = 0, 1, 2, 3, 4, 5
@@ -64,7 +70,6 @@ K_SAMPLED = 3       # K_STEPS at the last sample (X_SUM_* cover the steps since)
 K_REFUSED = 4       # 1 if the last call stopped before a step turning the bit over a sector
 NK = 5
 
-REGIME_ROTATING, REGIME_STUCK, REGIME_OFF_BOTTOM = 0, 1, 2
 MODE_KINEMATIC, MODE_SPEED, MODE_TORQUE = 0, 1, 2   # the top drive's (top_drive.MODES)
 
 EVENT_MARGIN = 1e-9     # a switch closer than this (fraction of the step) to its ends is not split
@@ -93,134 +98,6 @@ NA = 20     # A_WORK_TOP_DRIVE: work of the string's top torque; A_WORK_MOTOR: o
 (O_TAU, O_U, O_V, O_PHI, O_OMEGA, O_PHI_TD, O_W, O_T, O_TS, O_DELTA, O_REGIME, O_W0, O_OMEGA0,
  O_G, O_OMEGA_TD, O_TM) = range(16)
 NO = 16     # O_TM: motor torque (kinematic mode: the string torque, which imposes omega0)
-
-
-@njit(cache=True, inline="always")
-def _surface_at(surf, mask, phi, inv_dtheta, k_last, s_behind):
-    """The rock surface S(phi) before the current pass, linear between nodes, and its slope."""
-    pos = phi * inv_dtheta
-    km = math.floor(pos)
-    frac = pos - km
-    k0 = np.int64(km)
-    if k0 == k_last:
-        s0 = s_behind          # node k_last was already overwritten by this pass
-    else:
-        s0 = surf[k0 & mask]
-    s1 = surf[(k0 + 1) & mask]
-    return s0 + frac * (s1 - s0), (s1 - s0) * inv_dtheta
-
-
-@njit(cache=True, inline="always")
-def _breakaway_torque(v, hpsi, w0, nd, beta_lam):
-    """The stick law: a stuck bit stays stuck while T_s <= T_max.
-
-    T_max = n delta + beta lambda (cutting plus fully mobilised wear-flat friction) while the
-    bit is pressed on the rock; n delta alone when it would lift off (friction lost).
-    """
-    if v + hpsi * w0 >= 0.0:
-        return nd + beta_lam
-    return nd
-
-
-@njit(cache=True, inline="always")
-def _contact_law(v, hpsi, w0, nd, lam):
-    """Cutting plus wear-flat contact with the complementarity on g; returns (g, v+, and v+ of
-    the branches g = 1 and g = 0).
-
-    g = 1 if v+ > 0, g = 0 if v+ < 0, and g in [0, 1] keeping v+ = 0 (an axial stick): each
-    branch is tried in turn on the implicit axial update v+ = v + h psi (w0 - n delta - lam g).
-    """
-    v1 = v + hpsi * (w0 - nd - lam)              # branch g = 1 (v+ > 0)
-    if v1 > 0.0:
-        return 1.0, v1, v1, v1 + hpsi * lam
-    v0 = v + hpsi * (w0 - nd)                    # branch g = 0 (v+ < 0)
-    if v0 < 0.0:
-        return 0.0, v0, v1, v0
-    friction = hpsi * lam                        # axial stick, g in [0, 1] (v0 <= friction)
-    g = v0 / friction if friction > 0.0 else 0.0
-    return g, 0.0, v1, v0
-
-
-@njit(cache=True, inline="always")
-def _stick_reaction(v, om, ts, w0, h, hpsi):
-    """Omega+ = 0 held by the rock: the torque is the reaction; returns (v+, w, t, g).
-
-    The rock only pushes: a bit moving down or resting stops (v+ = 0, w is the reaction);
-    a bit that would rise keeps rising off the wear flats (the one-way axial hold).
-    """
-    t = ts + om / h
-    v_try = v + hpsi * w0
-    if v_try > 0.0:
-        return 0.0, w0 + v / hpsi, t, 1.0
-    return v_try, 0.0, t, 0.0
-
-
-@njit(cache=True, inline="always")
-def _crossing(earliest, start, end):
-    """The earlier of ``earliest`` and where a switching function linear over the step crosses
-    0 from ``start`` to ``end``, as fractions of the step (any value >= 1: no crossing)."""
-    if start != end:
-        at = start / (start - end)
-        if at < earliest:
-            return at
-    return earliest
-
-
-@njit(cache=True, inline="always")
-def _bit_rock_law(delta, slope, regime, v, om, ts, w0, om_top, n, lam, beta, h, hpsi):
-    """The set-valued bit-rock laws for one step; returns (regime, w, t, g, v+, omega+, event).
-
-    Off bottom (delta < 0) nothing acts; in contact a stuck bit stays stuck while the stick law
-    holds, otherwise the contact law gives g and v+, and a bit that would turn backwards is
-    stuck instead (no backward rotation in contact). ``event`` locates the first switch of a
-    law inside the step, as a fraction of it (>= 1: none): the bit stops turning (omega
-    crosses 0), breaks away (T_s crosses T_max, T_s rising at the top drive's mean speed over
-    the step ``om_top`` while stuck), its wear flats engage or lift off (V crosses 0), or it
-    lands or leaves the rock (delta crosses 0, delta at the step's ends from its rate
-    V - S' omega, S' the surface's ``slope``). The laws are linear between switches, so each
-    crossing is interpolated linearly over the step.
-    """
-    event = 2.0
-    if delta < 0.0:
-        regime = REGIME_OFF_BOTTOM
-        w = 0.0
-        t = 0.0
-        g = 0.0
-        v_new = v + hpsi * w0
-        om_new = om + h * ts
-    else:
-        nd = n * delta
-        stuck = False
-        if regime == REGIME_STUCK:
-            t_max = _breakaway_torque(v, hpsi, w0, nd, beta * lam)
-            stuck = ts <= t_max
-            rise = h * om_top                    # T_s over the step, the bit held
-            if ts + 0.5 * rise > t_max and rise > 0.0:
-                event = _crossing(event, t_max - (ts - 0.5 * rise), t_max - (ts + 0.5 * rise))
-        if not stuck:
-            g, v_new, v1, v0 = _contact_law(v, hpsi, w0, nd, lam)
-            if v > 0.0 and g < 1.0:              # the wear flats lift off
-                event = _crossing(event, v, v1)
-            elif v < 0.0 and g > 0.0:            # the wear flats land
-                event = _crossing(event, v, v0)
-            w = nd + lam * g
-            t = nd + beta * lam * g
-            om_new = om + h * (ts - t)
-            if om_new > 0.0:
-                regime = REGIME_ROTATING
-            else:
-                if regime == REGIME_ROTATING and om > 0.0:
-                    event = _crossing(event, om, om_new)        # the bit stops turning
-                stuck = True
-        if stuck:
-            regime = REGIME_STUCK
-            om_new = 0.0
-            v_new, w, t, g = _stick_reaction(v, om, ts, w0, h, hpsi)
-    delta_start = delta - 0.5 * h * (v - slope * om)      # the bit lands or leaves the rock
-    delta_end = delta + 0.5 * h * (v_new - slope * om_new)
-    if (delta_start < 0.0) != (delta_end < 0.0):
-        event = _crossing(event, delta_start, delta_end)
-    return regime, w, t, g, v_new, om_new, event
 
 
 @njit(cache=True, inline="always")
@@ -259,24 +136,6 @@ def _hoist_limit(v_new, v_min, hpsi):
     if v_new < v_min:
         return v_min, (v_min - v_new) / hpsi
     return v_new, 0.0
-
-
-@njit(cache=True, inline="always")
-def _first_swept_node(k_last, k_new, n_nodes):
-    """The blade sweep: the first node (absolute index) the blades pass in a step that ends
-    past node ``k_new``; at most one sector's ``n_nodes`` nodes are swept in a step."""
-    k_first = k_last + 1
-    if k_new - k_first >= n_nodes:
-        k_first = k_new - n_nodes + 1
-    return k_first
-
-
-@njit(cache=True, inline="always")
-def _blade_height(theta, phi, dphi, u, u_new):
-    """The blade sweep: the bit's axial position when a blade passes the angle ``theta`` in
-    a step from (phi, u) to (phi + dphi, u_new), u linear in phi over the step."""
-    frac = (theta - phi) / dphi
-    return u + frac * (u_new - u)
 
 
 @njit(cache=True, inline="always")
@@ -399,21 +258,8 @@ def _located_step(x, k, surf, p, c, acc, event):
             break
         regime, w, t, g, delta = regime_new, w_new, t_new, g_new, delta_new
         u_new = u_m + h2 * v_new
-        k_new = np.int64(math.floor(phi_new * inv_dth))
-        if k_new > k_last:
-            dphi = phi_new - phi
-            for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
-                uc = _blade_height(kk * dth, phi, dphi, u, u_new)
-                j = kk & mask
-                s_behind = surf[j]
-                if uc > s_behind:
-                    surf[j] = uc
-                    if uc > hole:
-                        hole = uc
-            k_last = k_new
-        elif k_new < k_last:
-            k_last = k_new
-            s_behind = surf[k_new & mask]
+        k_last, s_behind, hole = _sweep(surf, mask, n_nodes, dth, inv_dth, k_last, s_behind, hole,
+                                        phi, phi_new, u, u_new)
         a = _accumulate(a, hs, regime, 0.5 * (om + om_new), 0.5 * (v + v_new), w, t, ts,
                         f_hoist)
         sum_w += w * (hs / h)
@@ -572,23 +418,8 @@ def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
             v_bar = 0.5 * (v + v_new)
             om_bar = 0.5 * (om + om_new)
             u_new = u_m + h2 * v_new
-            # the blades sweep the rock: S <- max(S, u) at every node passed; backward
-            # rotation (possible only off bottom) cuts nothing
-            k_new = np.int64(math.floor(phi_new * inv_dth))
-            if k_new > k_last:
-                dphi = phi_new - phi
-                for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
-                    uc = _blade_height(kk * dth, phi, dphi, u, u_new)
-                    j = kk & mask
-                    s_behind = surf[j]             # the node's value before this pass
-                    if uc > s_behind:
-                        surf[j] = uc
-                        if uc > hole:
-                            hole = uc
-                k_last = k_new
-            elif k_new < k_last:
-                k_last = k_new
-                s_behind = surf[k_new & mask]
+            k_last, s_behind, hole = _sweep(surf, mask, n_nodes, dth, inv_dth, k_last, s_behind,
+                                            hole, phi, phi_new, u, u_new)
             a = _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, f_hoist)
             sum_w += w              # what a sensor sees: forces averaged over its sample
             sum_t += t              # (and, folded in at each sample, the window's integrals)
