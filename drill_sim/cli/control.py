@@ -62,7 +62,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         f"top-drive speed set-point [rpm], > 0 to {RPM_MAX:g} (with --wob-kn)")
     parser.add_argument("--wob-kn", type=number, help="its available weight on bit W0 [kN]")
     parser.add_argument("--scenarios", default="standard",
-                        help=f"comma-separated scenario sets: standard (all), {', '.join(SETS)}")
+                        help=f"comma-separated scenario sets: standard (all), {', '.join(SETS)}; "
+                             "or a rig scenario (shipped name or YAML, msg_docs/driver.md)")
     parser.add_argument("--laws", default=",".join(DEFAULT_LAWS),
                         help=f"comma-separated laws ({', '.join(LAWS)}); default "
                              f"{','.join(DEFAULT_LAWS)}")
@@ -212,7 +213,7 @@ def _ros_row(preset, scenario: Scenario, settings: LoopSettings, user: str | Non
     series = run_ros(preset, scenario, settings, user_command=user, progress=progress)
     drive = None if settings.law == "kinematic" else law_top_drive(preset, settings.law,
                                                                     settings.top_drive)
-    return sample_metrics(preset, series, scenario.window_start_s, drive,
+    return sample_metrics(preset, series, scenario.metrics_from_s, drive,
                           law="user" if user else settings.law, scenario=scenario.name,
                           sensor_profile=settings.sensor_profile,
                           string_model=settings.string_model)

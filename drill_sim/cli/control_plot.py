@@ -22,7 +22,7 @@ def plot_laws(path: str | Path, scenario: Scenario, results: list[LoopResult]) -
         axes[0].plot(s["time_s"], s["bit_speed_rad_s"] / RPM, lw=0.7, label=label)
         axes[1].plot(s["time_s"], s["surface_torque_nm"] / 1e3, lw=0.7, label=r.law)
     for ax in axes:
-        ax.axvspan(scenario.window_start_s, scenario.duration_s, color="0.9", zorder=0)
+        ax.axvspan(scenario.metrics_from_s, scenario.duration_s, color="0.9", zorder=0)
         if scenario.switch_on_s > 0.0:
             ax.axvline(scenario.switch_on_s, color="k", ls="--", lw=0.8)
         ax.grid(alpha=0.3)

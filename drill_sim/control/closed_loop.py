@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -30,8 +31,10 @@ from ..core import RPM, Preset, RigSample, load_preset
 from ..core.parameters import ParameterError, check_number
 from ..core.sensors import Measured
 from ..session import rules
-from ..session.parameter_table import specs
+from ..session.parameter_table import checked_change, specs
 from ..session.rig_session import RigSession
+from ..session.scenario import due
+from ..session.scenario_player import checked_changes
 from ..wire import cdr, rig_topics
 from . import LAWS, make_law
 from .evaluation import (
@@ -68,7 +71,7 @@ def session_parameters(preset: Preset, scenario: Scenario, settings: LoopSetting
     p = {s.name: s.default for s in specs(preset)}
     p.update(publish_clock=True, max_speed=True, rate_hz=1.0 / h,
              string_model=settings.string_model, sensor_profile=settings.sensor_profile,
-             sensor_seed=settings.sensor_seed, initial_state="steady",
+             sensor_seed=settings.sensor_seed, initial_state=scenario.initial_state,
              initial_top_drive_speed_rad_s=float(start),
              initial_weight_on_bit_n=float(1e3 * wob_kn[0]),
              initial_perturbation=settings.perturbation, record=str(record or ""),
@@ -95,21 +98,24 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
         raise ParameterError(f"wob_kn up to {wob_kn.max():g} kN is out of range: expected at "
                              f"most W_s = {preset.rig.submerged_weight_n / 1e3:g} kN")
     p = session_parameters(preset, scenario, settings, Path(record) if record else None)
+    check = partial(checked_change, {s.name: s for s in specs(preset)})
+    checked_changes(scenario, p, check)                # every change, before anything runs
     session = RigSession(p, geometry=preset.string, preset=preset.name)
     session.set_live([False] * len(session.outputs))   # nobody subscribes offline
     commands = _Commands(session)
     try:
         series = _close(session, commands, preset, scenario, settings, drive, h, n,
-                        speed_set, hook, progress)
+                        speed_set, hook, progress, check)
     finally:
         session.close()
-    window_k = max(1, math.ceil(scenario.window_start_s / h - 1e-9))
+    window_k = max(1, math.ceil(scenario.metrics_from_s / h - 1e-9))
     return loop_result(preset, scenario, settings, drive, session.rig, series, window_k)
 
 
 def _close(session: RigSession, commands: _Commands, preset: Preset, scenario: Scenario,
            settings: LoopSettings, drive, h: float, n: int, speed_set: np.ndarray,
-           hook: np.ndarray, progress: Callable[[float], None] | None
+           hook: np.ndarray, progress: Callable[[float], None] | None,
+           check: Callable[[dict[str, object], dict[str, object]], dict[str, object]]
            ) -> dict[str, np.ndarray]:
     rig = session.rig
     measure = _measure(settings)
@@ -132,9 +138,12 @@ def _close(session: RigSession, commands: _Commands, preset: Preset, scenario: S
         output = sup.step(measure(sample, reading))
     series = {k: np.empty(n + 1) for k in SERIES}
     _record(series, 0, sample, output)
-    window_k = max(1, math.ceil(scenario.window_start_s / h - 1e-9))
+    window_k = max(1, math.ceil(scenario.metrics_from_s / h - 1e-9))
     every = max(1, n // 200)
+    changes = list(scenario.changes)
     for k in range(1, n + 1):
+        while changes and due(changes[0][0], (k - 1) * h):     # as the node's scenario player
+            session.change(check(session.p, changes.pop(0)[1]))
         if speed_law:
             commands.send(float(output), float(hook[k - 1]))
         else:

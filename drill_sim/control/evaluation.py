@@ -5,7 +5,6 @@ set-points, the loop's settings, the sensors a law can read, and the metrics of 
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
@@ -13,9 +12,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..core import RPM, Preset, Rig, RigSample
-from ..core.parameters import ParameterError, check_number
+from ..core.parameters import ParameterError
 from ..core.stick_slip import severity_index
 from ..core.top_drive import TopDriveParameters
+from ..session.scenario import Scenario
 from . import LAWS, make_law
 from .laws import Law, SurfaceMeasurement
 from .tuning import pipe_impedance
@@ -59,56 +59,6 @@ def sensor_measurement(profile: str, sample_period_s: float, seed: int = 0) -> M
         return SurfaceMeasurement(sample.time_s, m.top_drive_speed_rad_s, m.motor_torque_nm,
                                   m.surface_torque_nm)
     return measure
-
-
-@dataclass(frozen=True)
-class Scenario:
-    """Set-points against time: piecewise-linear (time [s], value) breakpoints, held after the
-    last one. Metrics cover ``window_start_s`` .. ``duration_s`` (after the start's transient,
-    or after a step: the "after" of a before/after). ``switch_on_s`` > 0: the drive's own stiff
-    speed loop (``stiff_pi``, default gains) runs until then and the law takes over bumplessly
-    (a controller switched on in stick-slip); 0: the law from the start."""
-
-    name: str
-    rpm_points: tuple[tuple[float, float], ...]      # (time [s], top-drive speed set-point [rpm])
-    wob_kn_points: tuple[tuple[float, float], ...]   # (time [s], available weight W0 [kN])
-    duration_s: float = 60.0
-    window_start_s: float = 30.0
-    switch_on_s: float = 0.0
-    start_rpm: float | None = None     # the steady start's speed; None: the first set-point
-
-    def __post_init__(self) -> None:
-        check_number("duration_s", self.duration_s, high=1e5)
-        check_number("switch_on_s", self.switch_on_s, low_inclusive=True, high=self.duration_s)
-        check_number("window_start_s", self.window_start_s, low_inclusive=True,
-                     high=self.duration_s)
-        if not self.window_start_s < self.duration_s:
-            raise ParameterError(f"window_start_s = {self.window_start_s!r} is out of range: "
-                                 f"expected < duration_s = {self.duration_s!r}")
-        for label, points in (("rpm_points", self.rpm_points),
-                              ("wob_kn_points", self.wob_kn_points)):
-            if not points:
-                raise ParameterError(f"{label}: expected at least one (time_s, value) pair")
-            times = [check_number(f"{label} time", t, low_inclusive=True) for t, _ in points]
-            for _, v in points:
-                check_number(f"{label} value", v, low=None)
-            if any(b < a for a, b in itertools.pairwise(times)):
-                raise ParameterError(f"{label}: times must not decrease, got {times}")
-
-    @classmethod
-    def steady(cls, rpm: float, wob_kn: float, *, name: str | None = None,
-               duration_s: float = 60.0, window_start_s: float = 30.0,
-               switch_on_s: float = 0.0) -> Scenario:
-        """Constant set-points."""
-        return cls(name or f"{rpm:g}rpm_{wob_kn:g}kN", ((0.0, rpm),), ((0.0, wob_kn),),
-                   duration_s, window_start_s, switch_on_s)
-
-    def values(self, time_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(speed set-point [rad/s], W0 [kN]) at these times."""
-        def interp(points: tuple[tuple[float, float], ...]) -> np.ndarray:
-            t, v = zip(*points, strict=True)
-            return np.interp(time_s, np.asarray(t, float), np.asarray(v, float))
-        return interp(self.rpm_points) * RPM, interp(self.wob_kn_points)
 
 
 @dataclass(frozen=True)

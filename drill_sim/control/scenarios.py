@@ -9,7 +9,7 @@ established stick-slip (the before/after).
 from __future__ import annotations
 
 from ..core.parameters import ParameterError
-from .evaluation import Scenario
+from ..session.scenario import Scenario, load_scenario, scenario_names
 
 GRID_RPM = (40.0, 60.0, 90.0)
 GRID_WOB_KN = (80.0, 100.0, 120.0)
@@ -24,14 +24,15 @@ def grid(rpms: tuple[float, ...] = GRID_RPM,
 
 def wob_step() -> Scenario:
     """60 rpm; W0 80 → 120 kN in 1 s at 20 s; metrics over 25–50 s."""
-    return Scenario("wob_step", ((0.0, 60.0),), ((0.0, 80.0), (20.0, 80.0), (21.0, 120.0)),
-                    duration_s=50.0, window_start_s=25.0)
+    return Scenario.of_points("wob_step", ((0.0, 60.0),),
+                              ((0.0, 80.0), (20.0, 80.0), (21.0, 120.0)),
+                              duration_s=50.0, window_start_s=25.0)
 
 
 def speed_ramp() -> Scenario:
     """100 kN; 120 → 40 rpm from 10 s to 40 s; metrics over 20–50 s (through the region)."""
-    return Scenario("speed_ramp", ((0.0, 120.0), (10.0, 120.0), (40.0, 40.0)), ((0.0, 100.0),),
-                    duration_s=50.0, window_start_s=20.0)
+    return Scenario.of_points("speed_ramp", ((0.0, 120.0), (10.0, 120.0), (40.0, 40.0)),
+                              ((0.0, 100.0),), duration_s=50.0, window_start_s=20.0)
 
 
 def switch_on() -> Scenario:
@@ -51,12 +52,18 @@ STANDARD = ("grid", "wob_step", "speed_ramp", "switch_on")
 
 
 def named(names: tuple[str, ...] | list[str]) -> list[Scenario]:
-    """The scenarios of these set names, in order (``standard``: all of them)."""
+    """The scenarios of these set names, in order (``standard``: all of them); a name that is
+    no set is a scenario the rig plays (shipped, ``controller_on``, or a YAML file), the very
+    experiment a node runs with ``scenario:=``."""
     out: list[Scenario] = []
     for name in names:
         for part in (STANDARD if name == "standard" else (name,)):
-            if part not in SETS:
+            if part in SETS:
+                out.extend(SETS[part]())
+            elif part in scenario_names() or part.endswith((".yaml", ".yml")):
+                out.append(load_scenario(part))
+            else:
                 raise ParameterError(f"scenario set {part!r} is unknown: expected one of "
-                                     f"standard, {', '.join(SETS)}")
-            out.extend(SETS[part]())
+                                     f"standard, {', '.join(SETS)}, a rig scenario "
+                                     f"({', '.join(scenario_names())}) or a scenario YAML")
     return out

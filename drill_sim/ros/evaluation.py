@@ -59,7 +59,7 @@ def check_ros(scenario: Scenario, *, user_command: str | None = None) -> None:
     if user_command and scenario.switch_on_s > 0.0:
         raise ParameterError(f"scenario {scenario.name!r}: a --ros-controller cannot be "
                              "switched on: expected a scenario with the law from the start")
-    if user_command and len({v for _, v in scenario.rpm_points}) > 1:
+    if user_command and not scenario.speed_is_constant:
         raise ParameterError(f"scenario {scenario.name!r}: a --ros-controller gets no stamped "
                              "set-point: expected a constant rpm")
 

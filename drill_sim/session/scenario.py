@@ -1,4 +1,7 @@
-"""Driller scenarios: surface set points against time, as a driller would give them.
+"""Scenarios: surface set-points against time, a controller switch, run-time parameter changes
+and a metrics window — one experiment, whoever runs it: the rig session itself (the node's
+``scenario`` parameter), ``drill_sim_drive`` from outside, and the offline evaluation
+(``drill_sim control``, ``control.evaluation``).
 
 A scenario YAML has ``duration_s``, the rig ``initial_state`` it expects (``steady`` or
 ``rest``) and a list of ``points``; each point has ``at_s`` and sets one
@@ -9,39 +12,52 @@ ramp linearly from their previous set point; otherwise they step at ``at_s``. An
 (``drill_sim_controller``) on at that time: before it, the rig's drive runs its own speed loop.
 ``changes`` lists run-time parameter changes at simulated times, each a mapping with ``at_s``
 and the rig node's parameters it sets (``{at_s: 4.0, intrinsic_specific_energy_pa: 1.3e8}``:
-a harder formation from 4 s on).
+a harder formation from 4 s on). ``window_start_s`` (optional) starts the metrics window of an
+evaluation; without it, the window starts at the controller's switch, else at half the
+duration.
 
-A scenario is played by ``drill_sim_drive`` on the node's clock from outside, or by the rig
-session itself (the node's ``scenario`` parameter): then every set-point, change and switch
-lands on exactly the tick of its simulated time, in real time, at max speed and in lockstep
-alike, and is recorded.
+Played by the rig session, every set-point, change and switch lands on exactly the tick of its
+simulated time, in real time, at max speed and in lockstep alike, and is recorded.
 """
 
 from __future__ import annotations
 
 import math
-from bisect import bisect_right
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from ..core.parameters import ParameterError, check_number
 from ..core.resources import read_yaml, shipped_names
 from ..core.rig import RPM
 
 _KEYS = {"at_s", "rpm", "top_drive_speed_rad_s", "wob_kn", "hook_load_kn", "ramp"}
+_TOP_KEYS = {"description", "initial_state", "duration_s", "points", "controller", "changes",
+             "window_start_s"}
+# a point's unit -> its SI factor and channel
+UNITS = {"rpm": RPM, "top_drive_speed_rad_s": 1.0, "wob_kn": 1e3, "hook_load_kn": 1e3}
+DUE_TOLERANCE_S = 1e-9          # an event at a tick's time is due at that tick, rounding forgiven
+UNDER_TEST = ""                 # a controller switch to the law an evaluation scores
+
+
+def due(at_s: float, t_s: float) -> bool:
+    """Whether an event at ``at_s`` [s] is due at a tick at ``t_s`` [s] of the scenario."""
+    return at_s <= t_s + DUE_TOLERANCE_S
 
 
 @dataclass(frozen=True)
 class _Point:
     at_s: float
-    value: float
+    value: float              # in its ``unit``
     ramp: bool
-    is_wob: bool = False      # load channel: value is W0 [N] rather than H0 [N]
+    unit: str                 # a key of UNITS
 
 
 @dataclass(frozen=True)
 class ControllerSwitch:
-    """A reference controller (``law``) switched on at ``on_at_s`` [s] of the scenario."""
+    """A reference controller (``law``; UNDER_TEST: the law an evaluation scores) switched on at
+    ``on_at_s`` [s] of the scenario; before it the drive's own stiff speed loop runs."""
 
     law: str
     on_at_s: float
@@ -49,7 +65,8 @@ class ControllerSwitch:
 
 @dataclass(frozen=True)
 class Scenario:
-    """Set points for the top-drive speed [rad/s] and the hook load [N] against time [s]."""
+    """Set points for the top-drive speed and the load against time [s] (``commands_at`` in SI),
+    a controller switch, parameter changes by time, and the metrics window of an evaluation."""
 
     name: str
     description: str
@@ -59,24 +76,124 @@ class Scenario:
     load: tuple[_Point, ...]
     controller: ControllerSwitch | None = None
     changes: tuple[tuple[float, dict[str, object]], ...] = ()   # (at [s], parameters), by time
+    window_start_s: float | None = None   # metrics from here [s]; None: ``metrics_from_s``
+    start_rpm: float | None = None        # a steady start's speed [rpm]; None: the first point's
+
+    def __post_init__(self) -> None:
+        check_number(f"scenario {self.name!r} duration_s", self.duration_s, high=1e9)
+        if not self.speed or not self.load:
+            raise ParameterError(f"scenario {self.name!r}: needs at least one speed and one "
+                                 "load point")
+        if self.window_start_s is not None:
+            check_number(f"scenario {self.name!r} window_start_s", self.window_start_s,
+                         low_inclusive=True, high=self.duration_s)
+            if not self.window_start_s < self.duration_s:
+                raise ParameterError(f"scenario {self.name!r}: window_start_s = "
+                                     f"{self.window_start_s!r} is out of range: expected < "
+                                     f"duration_s = {self.duration_s!r}")
+        if self.start_rpm is not None:
+            check_number(f"scenario {self.name!r} start_rpm", self.start_rpm)
+
+    # ---- the evaluation's scenarios, built in code ---------------------------------------
+    @classmethod
+    def of_points(cls, name: str, rpm_points: tuple[tuple[float, float], ...],
+                  wob_kn_points: tuple[tuple[float, float], ...], *, duration_s: float = 60.0,
+                  window_start_s: float = 30.0, switch_on_s: float = 0.0,
+                  start_rpm: float | None = None) -> Scenario:
+        """Piecewise-linear (time [s], value) breakpoints, held after the last one: speed
+        set-points [rpm], available weight W0 [kN]; ``switch_on_s`` > 0: the drive's stiff
+        loop until then, the law under test after it (0: the law from the start)."""
+        def points(label: str, pairs, unit: str) -> tuple[_Point, ...]:
+            if not pairs:
+                raise ParameterError(f"{label}: expected at least one (time_s, value) pair")
+            out, last = [], -math.inf
+            for t, v in pairs:
+                t = check_number(f"{label} time", t, low_inclusive=True)
+                if t < last:
+                    raise ParameterError(f"{label}: times must not decrease, got "
+                                         f"{[p[0] for p in pairs]}")
+                last = t
+                out.append(_Point(t, check_number(f"{label} value", v, low=None), True, unit))
+            return tuple(out)
+        duration_s = check_number("duration_s", duration_s, high=1e5)
+        switch_on_s = check_number("switch_on_s", switch_on_s, low_inclusive=True,
+                                   high=duration_s)
+        return cls(name, "", duration_s, "steady", points("rpm_points", rpm_points, "rpm"),
+                   points("wob_kn_points", wob_kn_points, "wob_kn"),
+                   ControllerSwitch(UNDER_TEST, switch_on_s) if switch_on_s > 0.0 else None,
+                   window_start_s=window_start_s, start_rpm=start_rpm)
+
+    @classmethod
+    def steady(cls, rpm: float, wob_kn: float, *, name: str | None = None,
+               duration_s: float = 60.0, window_start_s: float = 30.0,
+               switch_on_s: float = 0.0) -> Scenario:
+        """Constant set-points."""
+        return cls.of_points(name or f"{rpm:g}rpm_{wob_kn:g}kN", ((0.0, rpm),), ((0.0, wob_kn),),
+                             duration_s=duration_s, window_start_s=window_start_s,
+                             switch_on_s=switch_on_s)
+
+    # ---- what it sets ---------------------------------------------------------------------
+    @property
+    def switch_on_s(self) -> float:
+        """When the controller is switched on [s]; 0: no switch (the law from the start)."""
+        return 0.0 if self.controller is None else self.controller.on_at_s
+
+    @property
+    def metrics_from_s(self) -> float:
+        """The start of the metrics window [s]: ``window_start_s``, else the controller's
+        switch, else half the duration."""
+        if self.window_start_s is not None:
+            return self.window_start_s
+        return self.switch_on_s if self.switch_on_s > 0.0 else 0.5 * self.duration_s
+
+    @property
+    def speed_is_constant(self) -> bool:
+        return len({p.value * UNITS[p.unit] for p in self.speed}) == 1
 
     def commands_at(self, t_s: float, submerged_weight_n: float) -> tuple[float, float]:
-        """(top-drive speed [rad/s], hook load [N]) at time ``t_s``; W0 set points use W_s."""
-        speed = _value(self.speed, t_s, lambda p: p.value)
-        hook = _value(self.load, t_s, lambda p: submerged_weight_n - p.value if p.is_wob
-                      else p.value)
-        return speed, max(hook, 0.0)
+        """(top-drive speed [rad/s], hook load [N], never negative) at time ``t_s`` [s]."""
+        speed = float(_channel(self.speed, np.float64(t_s)))
+        return speed, max(float(_hook(self.load, np.float64(t_s), submerged_weight_n)), 0.0)
+
+    def values(self, time_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(speed set-point [rad/s], W0 [kN]) at these times; ParameterError for a load given
+        as hook load (the evaluation sets weight on bit)."""
+        if any(p.unit != "wob_kn" for p in self.load):
+            raise ParameterError(f"scenario {self.name!r}: its load is a hook load: expected "
+                                 "weight on bit (wob_kn) set-points for an evaluation")
+        return _channel(self.speed, time_s), _interp(self.load, time_s, None)
 
 
-def _value(points: tuple[_Point, ...], t: float, value) -> float:
-    i = bisect_right([p.at_s for p in points], t) - 1
-    if i < 0:
-        return value(points[0])
-    if i + 1 < len(points) and points[i + 1].ramp:
-        a, b = points[i], points[i + 1]
-        f = (t - a.at_s) / (b.at_s - a.at_s)
-        return value(a) + f * (value(b) - value(a))
-    return value(points[i])
+def _interp(points: tuple[_Point, ...], t, value) -> np.ndarray:
+    """The channel at times ``t``: linear between a ramp point and the one before it, held
+    before a step (which takes effect at its time) and after the last point; ``value(p)``
+    each point's value (None: as given)."""
+    times, values = [], []
+    for i, p in enumerate(points):
+        v = p.value if value is None else value(p)
+        if i and not p.ramp:
+            times.append(p.at_s)             # held until the step ...
+            values.append(values[-1])
+        times.append(p.at_s)                 # ... which takes effect at its time
+        values.append(v)
+    return np.interp(t, times, values)
+
+
+def _channel(points: tuple[_Point, ...], t) -> np.ndarray:
+    """The speed channel [rad/s]: interpolated in its unit when the points share one."""
+    units = {p.unit for p in points}
+    if len(units) == 1:
+        return _interp(points, t, None) * UNITS[units.pop()]
+    return _interp(points, t, lambda p: p.value * UNITS[p.unit])
+
+
+def _hook(points: tuple[_Point, ...], t, submerged_weight_n: float) -> np.ndarray:
+    """The hook load [N]: W_s - W0 for weight-on-bit points."""
+    units = {p.unit for p in points}
+    if units == {"wob_kn"}:
+        return submerged_weight_n - 1e3 * _interp(points, t, None)
+    return _interp(points, t, lambda p: submerged_weight_n - 1e3 * p.value
+                   if p.unit == "wob_kn" else 1e3 * p.value)
 
 
 def scenario_names() -> list[str]:
@@ -93,6 +210,10 @@ def scenario_from_dict(name: str, data: object) -> Scenario:
             or not data["points"]:
         raise ParameterError(f"scenario {name!r}: expected a mapping with a non-empty list "
                              "'points' and 'duration_s'")
+    unknown = sorted(set(data) - _TOP_KEYS)
+    if unknown:
+        raise ParameterError(f"scenario {name!r}: unknown key(s) {unknown}: expected any of "
+                             f"{', '.join(sorted(_TOP_KEYS))}")
     duration = check_number(f"scenario {name!r} duration_s", data.get("duration_s"))
     speed: list[_Point] = []
     load: list[_Point] = []
@@ -113,11 +234,11 @@ def scenario_from_dict(name: str, data: object) -> Scenario:
             raise ParameterError(f"{where}: give at most one speed (rpm or "
                                  "top_drive_speed_rad_s) and one load (wob_kn or hook_load_kn)")
         for key in speeds:
-            v = check_number(f"{where} {key}", raw[key], low_inclusive=True)
-            speed.append(_Point(at, v * RPM if key == "rpm" else v, ramp))
+            speed.append(_Point(at, check_number(f"{where} {key}", raw[key], low_inclusive=True),
+                                ramp, key))
         for key in loads:
-            v = check_number(f"{where} {key}", raw[key], low_inclusive=True)
-            load.append(_Point(at, 1e3 * v, ramp, is_wob=key == "wob_kn"))
+            load.append(_Point(at, check_number(f"{where} {key}", raw[key], low_inclusive=True),
+                               ramp, key))
     if not speed or not load:
         raise ParameterError(f"scenario {name!r}: needs at least one speed and one load point")
     initial = data.get("initial_state", "steady")
@@ -126,7 +247,8 @@ def scenario_from_dict(name: str, data: object) -> Scenario:
                              "or rest")
     return Scenario(name, str(data.get("description", "")), duration, initial, tuple(speed),
                     tuple(load), _controller(name, data.get("controller"), duration),
-                    _changes(name, data.get("changes", []), duration))
+                    _changes(name, data.get("changes", []), duration),
+                    window_start_s=data.get("window_start_s"))
 
 
 def _changes(name: str, raw: object, duration_s: float

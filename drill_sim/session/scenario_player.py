@@ -11,7 +11,7 @@ from typing import Any
 
 from ..core import ParameterError
 from ..wire import cdr, rig_topics
-from .scenario import Scenario
+from .scenario import Scenario, due
 
 _SPEED = rig_topics.COMMAND_BY_RULE["top_drive"]
 _HOOK = rig_topics.COMMAND_BY_RULE["hook_load"]
@@ -72,8 +72,7 @@ class ScenarioPlayer:
         asked for now (so the new law answers the first sample at or after its time)."""
         sc, session = self.scenario, self.session
         t = session.sim_time_s - self._t0
-        due = t + 1e-9                                   # a tick's time, rounding forgiven
-        while self._next_change < len(sc.changes) and sc.changes[self._next_change][0] <= due:
+        while self._next_change < len(sc.changes) and due(sc.changes[self._next_change][0], t):
             changes = sc.changes[self._next_change][1]
             self._next_change += 1
             try:
@@ -83,7 +82,7 @@ class ScenarioPlayer:
                 session.log.error(f"scenario '{sc.name}': change at {t:.3f} s refused: {exc}")
         switch = sc.controller
         if switch is not None and not self._switched and \
-                switch.on_at_s <= due + 1.0 / session.p["rate_hz"]:
+                due(switch.on_at_s, t + 1.0 / session.p["rate_hz"]):
             self._ask(switch.law)
         speed, hook = sc.commands_at(t, session.rig.params.submerged_weight_n)
         held = self._held_setpoints

@@ -138,8 +138,12 @@ BREAKS: tuple[Break, ...] = (
         'perturbation=p.get("initial_perturbation", 0.0)', "perturbation=0.0",
         "tests/cli/test_cli_control.py::"
         "test_the_start_perturbation_is_one_option_and_an_offline_run_writes_an_exact_bag"),
+    one("the offline loop makes a scenario's change a tick early", CONTROL + "closed_loop.py",
+        "due(changes[0][0], (k - 1) * h)", "due(changes[0][0], k * h)",
+        "tests/control/test_closed_loop_session.py::"
+        "test_a_scenarios_parameter_change_lands_on_its_tick_offline_and_replays"),
     one("a scenario's controller switch asked a tick late", SESSION + "scenario_player.py",
-        'switch.on_at_s <= due + 1.0 / session.p["rate_hz"]', "switch.on_at_s <= due",
+        'due(switch.on_at_s, t + 1.0 / session.p["rate_hz"])', "due(switch.on_at_s, t)",
         f"{T_SCENARIO}::test_each_event_lands_on_the_tick_of_its_time"),
     one("MSE with the bit's circumference instead of its area", CONTROL + "evaluation.py",
         "    area = math.pi * preset.rig.bit_radius_m ** 2\n    drilled_m",

@@ -20,8 +20,9 @@ def base():
 def test_a_recorded_loop_resimulates_exactly_and_holds_what_the_loop_saw(base, tmp_path):
     """A WOB step with the law switched on, under noisy, late sensors: the bag re-runs bit for
     bit, and its samples are the loop's own series."""
-    scenario = Scenario("step", ((0.0, 60.0),), ((0.0, 90.0), (1.0, 90.0), (1.5, 110.0)),
-                        duration_s=3.0, window_start_s=1.0, switch_on_s=1.0)
+    scenario = Scenario.of_points("step", ((0.0, 60.0),),
+                                  ((0.0, 90.0), (1.0, 90.0), (1.5, 110.0)),
+                                  duration_s=3.0, window_start_s=1.0, switch_on_s=1.0)
     bag = tmp_path / "loop"
     r = run_loop(base, scenario, LoopSettings(law="z_torque", sensor_profile="surface_rig",
                                               sensor_seed=4), record=bag)
@@ -38,6 +39,68 @@ def test_the_loops_commands_pass_the_nodes_rules(base):
     """A set-point the rig node would refuse (above its largest top-drive speed) stops the
     loop with the node's refusal, as it would stop a lockstep run."""
     with pytest.raises(ParameterError, match="top-drive speed"):
-        run_loop(base, Scenario("fast", ((0.0, 60.0), (0.5, 600.0)), ((0.0, 100.0),),
-                                duration_s=1.0, window_start_s=0.5),
+        run_loop(base, Scenario.of_points("fast", ((0.0, 60.0), (0.5, 600.0)),
+                                          ((0.0, 100.0),), duration_s=1.0, window_start_s=0.5),
                  LoopSettings(law="kinematic"))
+
+
+YAML_SWITCH = {"duration_s": 2.0, "points": [{"at_s": 0.0, "rpm": 60.0, "wob_kn": 100.0}],
+               "controller": {"law": "z_torque", "on_at_s": 1.0}}
+
+
+def test_a_rig_scenario_is_the_evaluations_experiment(base):
+    """The driller's scenario (a YAML a node plays) and the evaluation's switch-on are one
+    experiment: the same points and switch run the offline loop bit for bit alike, and the
+    metrics window starts at the switch."""
+    from drill_sim.session.scenario import scenario_from_dict
+    rig = scenario_from_dict("yaml_switch", YAML_SWITCH)
+    made = Scenario.of_points("made", ((0.0, 60.0),), ((0.0, 100.0),), duration_s=2.0,
+                              window_start_s=1.0, switch_on_s=1.0)
+    assert rig.switch_on_s == made.switch_on_s == 1.0 and rig.metrics_from_s == 1.0
+    settings = LoopSettings(law="z_torque")
+    a, b = run_loop(base, rig, settings), run_loop(base, made, settings)
+    for key in ("bit_speed_rad_s", "motor_torque_nm", "law_output"):
+        assert (a.series[key] == b.series[key]).all(), key
+    assert a.ssi == b.ssi
+
+
+def test_a_scenarios_parameter_change_lands_on_its_tick_offline_and_replays(base, tmp_path):
+    """A harder formation at 1.5 s: the loop is the unchanged one's, bit for bit, up to that
+    tick and not after; the bag records the change and re-simulates exactly."""
+    from drill_sim.session.scenario import scenario_from_dict
+    plain = scenario_from_dict("plain", YAML_SWITCH)
+    harder = scenario_from_dict("harder", {**YAML_SWITCH, "changes": [
+        {"at_s": 1.5, "intrinsic_specific_energy_pa": 1.3e8}]})
+    settings = LoopSettings(law="z_torque")
+    a = run_loop(base, plain, settings)
+    b = run_loop(base, harder, settings, record=tmp_path / "harder")
+    k = 1500                                            # the tick at 1.5 s (h = 1 ms)
+    wob_a, wob_b = a.series["wob_n"], b.series["wob_n"]
+    assert (wob_a[:k + 1] == wob_b[:k + 1]).all()
+    assert abs(wob_b[k + 2:] - wob_a[k + 2:]).max() > 1e3     # a harder rock: another weight
+    result = resimulate(tmp_path / "harder")
+    assert result.exact, result.explanation()
+
+
+def test_a_bad_scenario_change_is_refused_before_the_loop_runs(base):
+    from drill_sim.session.scenario import scenario_from_dict
+    bad = scenario_from_dict("bad", {**YAML_SWITCH, "changes": [
+        {"at_s": 1.0, "intrinsic_specific_energy_pa": -1.0}]})
+    with pytest.raises(ParameterError, match=r"change at 1 s: intrinsic_specific_energy_pa"):
+        run_loop(base, bad, LoopSettings(law="z_torque"))
+
+
+def test_a_hook_load_scenario_is_refused_by_the_evaluation(base):
+    from drill_sim.session.scenario import scenario_from_dict
+    hook = scenario_from_dict("hook", {"duration_s": 2.0, "points": [
+        {"at_s": 0.0, "rpm": 60.0, "hook_load_kn": 900.0}]})
+    with pytest.raises(ParameterError, match="hook load: expected weight on bit"):
+        run_loop(base, hook, LoopSettings(law="z_torque"))
+
+
+def test_the_evaluation_takes_the_rigs_shipped_scenarios_by_name():
+    from drill_sim.control.scenarios import named
+    [on] = named(["controller_on"])
+    assert on.switch_on_s == 35.0 and on.metrics_from_s == 35.0
+    with pytest.raises(ParameterError, match="controller_on"):      # the refusal lists them
+        named(["no_such_set"])

@@ -160,7 +160,7 @@ def test_bad_scenarios_are_refused_by_name(kwargs, words):
     base = {"name": "x", "rpm_points": ((0.0, 60.0),), "wob_kn_points": ((0.0, 100.0),),
             "duration_s": 40.0, "window_start_s": 20.0}
     with pytest.raises(ParameterError, match=words):
-        Scenario(**{**base, **kwargs})
+        Scenario.of_points(**{**base, **kwargs})
 
 
 def test_weight_above_the_string_weight_is_refused(preset):

@@ -18,8 +18,8 @@ def test_ros_lockstep_scores_equal_the_offline_scores(ros):
     preset = load_preset("base")
     settings = LoopSettings(law="z_torque", gains=reference_gains("z_torque", preset, 2900.0),
                             perturbation=0.0)
-    scenario = Scenario("step", ((0.0, 61.0),), ((0.0, 100.0),), duration_s=1.2,
-                        window_start_s=0.2, start_rpm=60.0)
+    scenario = Scenario.of_points("step", ((0.0, 61.0),), ((0.0, 100.0),), duration_s=1.2,
+                                  window_start_s=0.2, start_rpm=60.0)
     drive = preset.top_drive                                     # its limits: ±60 kN·m
     through_nodes = run_ros(preset, scenario, settings)
     offline = run_loop(preset, scenario, settings)
@@ -41,9 +41,9 @@ def test_ros_lockstep_plays_a_wob_step_and_a_speed_ramp_at_the_offline_instants(
     preset = load_preset("base")
     gains = {} if law == "kinematic" else reference_gains(law, preset, 2900.0)
     settings = LoopSettings(law=law, gains=gains, perturbation=0.0)
-    scenario = Scenario("step_ramp", ((0.0, 60.0), (0.2, 60.0), (1.0, 66.0)),
-                        ((0.0, 100.0), (0.6, 100.0), (0.7, 115.0)), duration_s=1.2,
-                        window_start_s=0.2)
+    scenario = Scenario.of_points("step_ramp", ((0.0, 60.0), (0.2, 60.0), (1.0, 66.0)),
+                                  ((0.0, 100.0), (0.6, 100.0), (0.7, 115.0)), duration_s=1.2,
+                                  window_start_s=0.2)
     drive = None if law == "kinematic" else preset.top_drive
     through_nodes = run_ros(preset, scenario, settings)
     offline = run_loop(preset, scenario, settings)
@@ -67,13 +67,13 @@ def test_ros_lockstep_switches_the_law_on_at_the_offline_sample(ros):
     preset = load_preset("base")
     settings = LoopSettings(law="z_torque", gains=reference_gains("z_torque", preset, 2900.0),
                             perturbation=0.0)
-    scenario = Scenario("switch", ((0.0, 60.0),), ((0.0, 100.0),), duration_s=1.0,
-                        window_start_s=0.2, switch_on_s=0.4, start_rpm=61.0)
+    scenario = Scenario.of_points("switch", ((0.0, 60.0),), ((0.0, 100.0),), duration_s=1.0,
+                                  window_start_s=0.2, switch_on_s=0.4, start_rpm=61.0)
     through_nodes = run_ros(preset, scenario, settings)
     offline = run_loop(preset, scenario, settings)
-    stiff = run_loop(preset, Scenario("stiff", scenario.rpm_points, scenario.wob_kn_points,
-                                      duration_s=1.0, window_start_s=0.2, switch_on_s=1.0,
-                                      start_rpm=61.0), settings)
+    stiff = run_loop(preset, Scenario.of_points("stiff", ((0.0, 60.0),), ((0.0, 100.0),),
+                                                duration_s=1.0, window_start_s=0.2,
+                                                switch_on_s=1.0, start_rpm=61.0), settings)
     late = slice(450, None)                              # the switch made a difference
     assert not np.allclose(stiff.series["motor_torque_nm"][late],
                            offline.series["motor_torque_nm"][late], rtol=1e-6, atol=0)

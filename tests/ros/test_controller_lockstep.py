@@ -52,9 +52,9 @@ def test_lockstep_nodes_reproduce_the_offline_loop(ros):
         wait_for(lambda: bit and motor and min(max(bit), max(motor)) * 1e-9 >= DURATION_S,
                  ros, 240.0,
                  f"{DURATION_S} s of lockstep ticks")
-    offline = run_loop(preset, Scenario("step", ((0.0, 61.0),), ((0.0, 100.0),),
-                                        duration_s=DURATION_S, window_start_s=0.5,
-                                        start_rpm=60.0),
+    offline = run_loop(preset, Scenario.of_points("step", ((0.0, 61.0),), ((0.0, 100.0),),
+                                                  duration_s=DURATION_S, window_start_s=0.5,
+                                                  start_rpm=60.0),
                        LoopSettings(law="z_torque", gains=gains, perturbation=0.0))
     n = len(offline.series["time_s"])
     stamps = sorted(bit)[:n]
