@@ -35,7 +35,7 @@ from ..session.parameter_table import checked_change, specs
 from ..session.rig_session import RigSession
 from ..session.scenario import due
 from ..session.scenario_player import checked_changes
-from ..wire import cdr, rig_topics
+from ..wire import rig_topics
 from . import LAWS, make_law
 from .evaluation import (
     LoopResult,
@@ -181,12 +181,11 @@ def _measure(settings: LoopSettings) -> Callable[[RigSample, Measured], SurfaceM
 
 class _Commands:
     """The loop's commands into the session as the node takes them, each sent when its value
-    changes (the session holds it meanwhile); as CDR bytes when the session records (so the
-    bag holds them as a node's does), else as values."""
+    changes (the session holds it meanwhile; ``RigSession.send_command`` records it as the
+    message a driver would have sent)."""
 
     def __init__(self, session: RigSession) -> None:
         self.session = session
-        self.encode = cdr.stamped_vectors(rig_topics.FRAME_TOP_DRIVE)
         self.held: list[float | None] = [None, None, None]      # speed, hook, torque
 
     def send(self, speed: float, hook: float, torque: float | None = None) -> None:
@@ -202,12 +201,7 @@ class _Commands:
             self._one(TORQUE, (0.0, 0.0, 0.0, 0.0, 0.0, torque))
 
     def _one(self, topic: rig_topics.RigTopic, six: tuple[float, ...]) -> None:
-        s = self.session
-        if s.recorder is not None:
-            sec, nsec = divmod(s.stamp_ns(), 1_000_000_000)
-            refusal = s.receive(topic, self.encode(sec, nsec, six))
-        else:
-            refusal = s.command(topic, rig_topics.FRAME_TOP_DRIVE, six)
+        refusal = self.session.send_command(topic, six)
         if refusal is not None:
             raise ParameterError(f"the loop's {topic.name} command was refused: {refusal}")
 

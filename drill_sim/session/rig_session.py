@@ -38,6 +38,7 @@ from .scenario_player import ScenarioPlayer
 IN_FLIGHT_S = 0.5
 
 Send = Callable[[bytes], object]
+_ENCODE_COMMAND = cdr.stamped_vectors(rig_topics.FRAME_TOP_DRIVE)   # the drive's commands
 
 
 @dataclass(frozen=True)
@@ -158,6 +159,16 @@ class RigSession:
         if refusal is None:
             return None
         return "in flight" if self._in_flight(topic) else refusal
+
+    def send_command(self, topic: rig_topics.RigTopic, six: Sequence[float], *,
+                     internal: bool = False) -> rules.Refusal | str | None:
+        """A command the session's own driver makes (a scenario's set-point, the offline loop's
+        law), stamped now: recorded as the message a driver would have sent (its bytes, only
+        when recording), then ``command``."""
+        sec, nsec = divmod(self.stamp_ns(), 1_000_000_000)
+        data = _ENCODE_COMMAND(sec, nsec, six) if self.recorder is not None else b""
+        return self.command(topic, rig_topics.FRAME_TOP_DRIVE, six, data, (sec, nsec),
+                            internal=internal)
 
     def receive(self, topic: rig_topics.RigTopic, data: bytes) -> rules.Refusal | str | None:
         """A command message's CDR bytes as they arrived on ``topic``: decoded, then

@@ -10,12 +10,11 @@ from collections.abc import Callable
 from typing import Any
 
 from ..core import ParameterError
-from ..wire import cdr, rig_topics
+from ..wire import rig_topics
 from .scenario import Scenario, due
 
 _SPEED = rig_topics.COMMAND_BY_RULE["top_drive"]
 _HOOK = rig_topics.COMMAND_BY_RULE["hook_load"]
-_ENCODE = cdr.stamped_vectors(rig_topics.FRAME_TOP_DRIVE)
 
 
 def checked_changes(scenario: Scenario, p: dict[str, object],
@@ -92,10 +91,7 @@ class ScenarioPlayer:
             if six[5 - 3 * k] == held[k]:
                 continue
             held[k] = six[5 - 3 * k]
-            sec, nsec = divmod(session.stamp_ns(), 1_000_000_000)
-            data = _ENCODE(sec, nsec, six) if session.recorder is not None else b""
-            refusal = session.command(topic, rig_topics.FRAME_TOP_DRIVE, six, data, (sec, nsec),
-                                   internal=True)
+            refusal = session.send_command(topic, six, internal=True)
             if refusal is None:
                 session.last_command_s = session.clock()     # the rig is being commanded
             elif refusal != "in flight":
