@@ -34,7 +34,8 @@ setup(
     extras_require={
         "test": ["pytest>=8", "pytest-xdist>=3.5", "hypothesis>=6.100", "ruff>=0.6",
                  "colcon-common-extensions>=0.3",
-                 "rosbags>=0.10", "mcap-ros2-support>=0.5", "dask[distributed]>=2024.1"],
+                 "rosbags>=0.10", "mcap-ros2-support>=0.5", "dask[distributed]>=2024.1",
+                 "mutmut>=3.8,<4"],
         "map-cluster": ["dask[distributed]>=2024.1"],   # drill_sim map --scheduler
     },
     zip_safe=False,

@@ -82,6 +82,19 @@ def session_parameters(preset: Preset, scenario: Scenario, settings: LoopSetting
     return p
 
 
+def tick_commands(preset: Preset, scenario: Scenario, h: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """(speed set-point [rad/s], hook load [N]) at each tick k h of the scenario, k = 0..n:
+    the very numbers the offline loop and the nodes' lockstep run use."""
+    n = math.floor(scenario.duration_s / h + 1e-9)
+    speed_set, wob_kn = scenario.values(np.arange(n + 1) * h)
+    hook = preset.rig.submerged_weight_n - 1e3 * wob_kn
+    if np.any(hook < 0.0):
+        raise ParameterError(f"wob_kn up to {wob_kn.max():g} kN is out of range: expected at "
+                             f"most W_s = {preset.rig.submerged_weight_n / 1e3:g} kN")
+    return speed_set, hook
+
+
 def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *,
              progress: Callable[[float], None] | None = None,
              record: str | Path | None = None) -> LoopResult:
@@ -90,13 +103,8 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
     preset = load_preset(preset) if isinstance(preset, str) else preset
     h = check_number("sample_period_s", settings.sample_period_s, high=1.0)
     drive = law_top_drive(preset, settings.law, settings.top_drive)
-    n = math.floor(scenario.duration_s / h + 1e-9)
-    times = np.arange(n + 1) * h
-    speed_set, wob_kn = scenario.values(times)
-    hook = preset.rig.submerged_weight_n - 1e3 * wob_kn
-    if np.any(hook < 0.0):
-        raise ParameterError(f"wob_kn up to {wob_kn.max():g} kN is out of range: expected at "
-                             f"most W_s = {preset.rig.submerged_weight_n / 1e3:g} kN")
+    speed_set, hook = tick_commands(preset, scenario, h)
+    n = speed_set.size - 1
     p = session_parameters(preset, scenario, settings, Path(record) if record else None)
     check = partial(checked_change, {s.name: s for s in specs(preset)})
     checked_changes(scenario, p, check)                # every change, before anything runs

@@ -30,13 +30,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..control import LAWS
+from ..control import LAWS, closed_loop
 from ..control.evaluation import LoopSettings, Scenario, law_top_drive
 from ..control.tuning import pipe_impedance
-from ..core import RPM, Preset
+from ..core import Preset
 from ..core.parameters import ParameterError
 from ..core.rig import REGIME_STUCK
 from ..programs import program
+from ..session.parameter_table import specs
 from ..wire.rig_topics import JOINT_PLACES, topic
 
 NS = "/drill_sim_control"
@@ -67,41 +68,37 @@ def check_ros(scenario: Scenario, *, user_command: str | None = None) -> None:
 def tick_commands(preset: Preset, scenario: Scenario, settings: LoopSettings
                   ) -> tuple[np.ndarray, np.ndarray]:
     """(speed set-point [rad/s], hook load [N]) at each tick k·h, as ``run_loop`` computes
-    them, so the nodes get the very numbers the offline loop uses."""
+    them (``closed_loop.tick_commands``), so the nodes get the very numbers the offline loop
+    uses."""
     check_ros(scenario)
-    h = settings.sample_period_s
-    n = math.floor(scenario.duration_s / h + 1e-9)
-    speed_set, wob_kn = scenario.values(np.arange(n + 1) * h)
-    hook = preset.rig.submerged_weight_n - 1e3 * wob_kn
-    if np.any(hook < 0.0):
-        raise ParameterError(f"wob_kn up to {wob_kn.max():g} kN is out of range: expected at "
-                             f"most W_s = {preset.rig.submerged_weight_n / 1e3:g} kN")
-    return speed_set, hook
+    return closed_loop.tick_commands(preset, scenario, settings.sample_period_s)
+
+
+def ros_value(value: object) -> str:
+    """A parameter value as ``-p name:=VALUE`` takes it."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(ros_value(v) for v in value) + "]"
+    return str(value)
 
 
 def rig_command(preset: Preset, scenario: Scenario, settings: LoopSettings) -> list[str]:
-    speed_set, _ = tick_commands(preset, scenario, settings)
-    speed = float(speed_set[0])
-    wob = 1e3 * float(scenario.values(np.zeros(1))[1][0])
-    if scenario.start_rpm is not None:            # a steady start away from the set-point
-        speed = scenario.start_rpm * RPM
-    drive = law_top_drive(preset, settings.law, settings.top_drive)
+    """The rig node of the offline loop's session (``closed_loop.session_parameters``: the
+    same drive, start, sensors and string), paused, in lockstep on the loop's commands."""
+    check_ros(scenario)
+    p = closed_loop.session_parameters(preset, scenario, settings)
+    defaults = {s.name: s.default for s in specs(preset)}
+    given = {k: v for k, v in p.items()
+             if k not in ("max_speed", "record") and v != defaults.get(k)}
     topic = LAWS[settings.law].command_topic.removeprefix("~/")
-    params = {"preset": preset.name, "publish_clock": "true", "lockstep": "true",
-              "lockstep_topics": f"[{topic}, cmd/hook_load]", "start_paused": "true",
-              "lockstep_timeout_s": "3600.0",
-              "rate_hz": repr(1.0 / settings.sample_period_s),
-              "top_drive_mode": drive.top_drive_mode,
-              "top_drive_inertia_kg_m2": repr(drive.top_drive_inertia_kg_m2),
-              "motor_torque_max_nm": repr(drive.motor_torque_max_nm),
-              "motor_torque_min_nm": repr(drive.motor_torque_min_nm),
-              "initial_state": "steady", "initial_top_drive_speed_rad_s": repr(speed),
-              "initial_weight_on_bit_n": repr(wob), "sensor_profile": settings.sensor_profile,
-              "sensor_seed": str(settings.sensor_seed), "string_model": settings.string_model,
-              "initial_perturbation": repr(float(settings.perturbation))}
+    given.update(preset=preset.name, lockstep=True, lockstep_topics=[topic, "cmd/hook_load"],
+                 start_paused=True, lockstep_timeout_s=3600.0)
     cmd = [program("drill_sim_node"), "--ros-args", "-r", f"__ns:={NS}"]
-    for k, v in params.items():
-        cmd += ["-p", f"{k}:={v}"]
+    for k, v in given.items():
+        cmd += ["-p", f"{k}:={ros_value(v)}"]
     return cmd
 
 
