@@ -3,6 +3,8 @@ commands pass the node's rules, and it starts as the node does (``initial_pertur
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from drill_sim.bag.series import rig_series
@@ -104,3 +106,67 @@ def test_the_evaluation_takes_the_rigs_shipped_scenarios_by_name():
     assert on.switch_on_s == 35.0 and on.metrics_from_s == 35.0
     with pytest.raises(ParameterError, match="controller_on"):      # the refusal lists them
         named(["no_such_set"])
+
+
+def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base):
+    """The offline loop's semantics, computed independently on a bare ``Rig``: set-point and
+    hook load k held over k..k+1, the motor torque answered to sample k applied over
+    k..k+1, the drive's stiff loop until sample ceil(switch_on_s / h), then the law, bumpless;
+    the window from sample ceil(window_start_s / h). Speed and WOB both ramp, so a set-point
+    or a load a tick early or late shows."""
+    from drill_sim.control.closed_loop import session_parameters, tick_commands
+    from drill_sim.control.evaluation import ideal_measurement, law_gains, law_top_drive
+    from drill_sim.control.supervisor import Supervisor
+    from drill_sim.control.tuning import pipe_impedance
+    from drill_sim.session import rules
+    scenario = Scenario.of_points("ramps", ((0.0, 60.0), (0.1, 60.0), (0.9, 70.0)),
+                                  ((0.0, 100.0), (0.2, 100.0), (0.8, 110.0)), duration_s=1.0,
+                                  window_start_s=0.6, switch_on_s=0.3)
+    settings = LoopSettings(law="z_torque")
+    h = settings.sample_period_s
+    result = run_loop(base, scenario, settings)
+
+    p = session_parameters(base, scenario, settings)
+    rig = rules.make_rig(p)
+    rules.start(rig, p)
+    speed, hook = tick_commands(base, scenario, h)
+    drive = law_top_drive(base, "z_torque", None)
+    sup = Supervisor(h, pipe_impedance(base), drive.top_drive_inertia_kg_m2, "stiff_pi",
+                     {"torque_min_nm": drive.motor_torque_min_nm,
+                      "torque_max_nm": drive.motor_torque_max_nm},
+                     speed_set_rad_s=float(speed[0]))
+    sup.last_output = rig.commanded_motor_torque_nm
+    out = sup.step(ideal_measurement(rig.sample()))
+    steps = round(h / rig.dt_s)
+    bit, motor, law_out = [rig.sample().bit_speed_rad_s], [rig.sample().motor_torque_nm], [out]
+    for k in range(1, speed.size):
+        rig.command(float(speed[k - 1]), float(hook[k - 1]))
+        rig.command_motor_torque(out)
+        rig.advance_steps(steps)
+        if k == 600:
+            rig.reset_metrics_window()
+        s = rig.sample()
+        if k == 300:
+            sup.replace_law("z_torque", law_gains(settings, drive))
+        sup.set_speed(float(speed[k]))
+        out = sup.step(ideal_measurement(s))
+        bit.append(s.bit_speed_rad_s)
+        motor.append(s.motor_torque_nm)
+        law_out.append(out)
+    assert list(result.series["bit_speed_rad_s"]) == bit
+    assert list(result.series["motor_torque_nm"]) == motor
+    assert list(result.series["law_output"]) == law_out
+    # the result's figures, from the hand loop's own window (samples 600.., rpm = 2 pi/60)
+    metrics, rpm = rig.metrics(), 2.0 * math.pi / 60.0
+    assert result.window_s == pytest.approx(0.4, abs=1e-9)
+    assert (result.law, result.scenario, result.sensor_profile, result.string_model) == (
+        "z_torque", "ramps", "ideal", "lumped")
+    assert result.mean_bit_speed_rpm == pytest.approx(metrics["mean_bit_speed_rad_s"] / rpm,
+                                                      rel=1e-12)
+    assert result.min_bit_speed_rpm == pytest.approx(metrics["min_bit_speed_rad_s"] / rpm,
+                                                     rel=1e-12)
+    assert result.max_bit_speed_rpm == pytest.approx(metrics["max_bit_speed_rad_s"] / rpm,
+                                                     rel=1e-12)
+    on_limit = [abs(abs(o) - 6e4) < 1e-4 for o in law_out[600:]]
+    assert result.saturation_fraction == pytest.approx(sum(on_limit) / len(on_limit))
+    assert result.saturation_time_s == pytest.approx(result.saturation_fraction * 0.4)

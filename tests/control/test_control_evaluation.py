@@ -176,3 +176,42 @@ def test_series_are_sampled_at_h(preset):
     assert len(t) == 101
     # k h exactly, to round-off: the session's step divides h (10 ms = 100 steps of 100 us)
     assert np.abs(t - np.arange(101) * 0.01).max() < 1e-12
+
+
+def test_metrics_of_a_recording_worked_by_hand():
+    """``sample_metrics`` on ten samples whose figures are worked out here: the window from
+    0.3 s holds samples 3..9."""
+    from drill_sim.control.evaluation import sample_metrics
+    from drill_sim.core.top_drive import TopDriveParameters
+    preset = load_preset("base")
+    drive = TopDriveParameters(motor_torque_max_nm=1000.0, motor_torque_min_nm=-500.0)
+    t = np.arange(10) * 0.1
+    series = {
+        "time_s": t,
+        "bit_speed_rad_s": np.array([1, 1, 2, 0, 0, 3, 2, 2, 2, 2], float),
+        "stuck": np.array([0, 0, 0, 1, 1, 0, 0, 0, 0, 0], float),
+        "bit_depth_m": 10.0 + 0.01 * np.arange(10),
+        "surface_torque_nm": np.array([0, 0, 0, 100, 300, 200, 200, 200, 200, 200], float),
+        "top_drive_angle_rad": 0.5 * np.arange(10),
+        "motor_torque_nm": np.array([0, 0, 0, 1000, -500, 1000, 10, 20, 30, 40], float),
+        "wob_n": np.array([0, 0, 0, 5e4, 7e4, 7e4, 7e4, 7e4, 7e4, 7e4], float),
+    }
+    r = sample_metrics(preset, series, 0.3, drive, law="x", scenario="y")
+    rpm = 2 * math.pi / 60
+    assert r.ssi == pytest.approx(3.0 / (2 * 11 / 7))
+    assert r.stick_fraction == pytest.approx(2 / 7)
+    assert r.window_s == pytest.approx(0.6)
+    assert r.mean_rop_m_h == pytest.approx(0.06 / 0.6 * 3600)
+    assert (r.mean_bit_speed_rpm, r.min_bit_speed_rpm, r.max_bit_speed_rpm) == pytest.approx(
+        (11 / 7 / rpm, 0.0, 3.0 / rpm))
+    assert r.surface_torque_p2p_nm == 200.0
+    assert r.mean_surface_torque_nm == pytest.approx(1400 / 7)
+    assert r.surface_torque_rms_nm == pytest.approx(np.std([100, 300, 200, 200, 200, 200, 200]))
+    assert r.saturation_fraction == pytest.approx(3 / 7)
+    assert r.saturation_time_s == pytest.approx(3 / 7 * 0.6)
+    area = math.pi * preset.rig.bit_radius_m ** 2
+    work = 0.5 * (100 + 300 + 200 * 4)               # torque k times the turn to k + 1
+    assert r.mse_pa == pytest.approx(7e4 / area + work / (area * 0.06))
+    assert (r.law, r.scenario) == ("x", "y")
+    assert math.isnan(sample_metrics(preset, series, 0.3, None, law="x",
+                                     scenario="y").saturation_fraction)

@@ -160,3 +160,13 @@ def test_held_lag_is_the_exact_exponential_of_a_held_step():
     shown = [lag.step(1.0) for _ in range(30)]
     expected = [1.0 - math.exp(-k * h / tau) for k in range(30)]
     assert shown == pytest.approx(expected, rel=1e-12, abs=1e-15)
+
+
+def test_a_steep_trend_is_removed_before_the_peak_is_sought():
+    """A torque climbing 5 kN·m/s (the string winding up as the bit sticks) under a 1 kN·m,
+    0.5 Hz oscillation: the trend's low-frequency energy would outweigh the peak were it
+    kept (or doubled)."""
+    h = 0.01
+    t = np.arange(6000) * h
+    torque = 8000 + 5000 * t + 1000 * np.sin(2 * math.pi * 0.5 * t + 0.3)
+    assert dominant_frequency_hz(torque, h) == pytest.approx(0.5, rel=0.01)
