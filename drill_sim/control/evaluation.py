@@ -12,7 +12,6 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..core import RPM, Preset, Rig, RigSample
-from ..core.parameters import ParameterError
 from ..core.stick_slip import severity_index
 from ..core.top_drive import TopDriveParameters
 from ..session.scenario import Scenario
@@ -33,32 +32,9 @@ def ideal_measurement(sample: RigSample) -> SurfaceMeasurement:
 
 
 def sensor_profiles() -> list[str]:
-    """The sensor profiles a loop can measure through (``ideal`` alone before the core's
-    sensor model exists)."""
-    try:
-        from ..core.sensor_profile import profile_names
-    except ImportError:
-        return ["ideal"]
+    """The sensor profiles a loop can measure through (the core's shipped ones)."""
+    from ..core.sensor_profile import profile_names
     return profile_names()
-
-
-def sensor_measurement(profile: str, sample_period_s: float, seed: int = 0) -> Measure:
-    """The rig's sensor model (``core.sensors.SensorBank``) called once per controller sample,
-    as the node calls it once per tick: a profile name or YAML path, seeded noise."""
-    if profile == "ideal":
-        return ideal_measurement
-    try:
-        from ..core.sensors import SensorBank
-    except ImportError as exc:
-        raise ParameterError(f"sensor_profile = {profile!r}: this build has no sensor model; "
-                             "expected 'ideal'") from exc
-    bank = SensorBank(profile, sample_period_s, seed)
-
-    def measure(sample: RigSample) -> SurfaceMeasurement:
-        m = bank.measure(sample.time_s, sample)
-        return SurfaceMeasurement(sample.time_s, m.top_drive_speed_rad_s, m.motor_torque_nm,
-                                  m.surface_torque_nm)
-    return measure
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ from ..core import NoSteadyDrilling, ParameterError
 from ..core.figures import figures_line
 from ..core.parameters import StringGeometry
 from ..core.rig import RigSample
-from ..core.sensor_profile import CHANNELS, SensorProfile
+from ..core.sensor_profile import SensorProfile
 from ..core.sensors import Measured, session_sensors
 from ..wire import WireError, cdr, rig_topics
 from . import rules
@@ -30,7 +30,7 @@ from .lockstep import Lockstep
 from .pacing import Pacer
 from .parameter_table import SPLITS
 from .recorder import SessionRecorder
-from .rig_messages import RigEncoders
+from .rig_messages import TickOutputs
 from .scenario import Scenario
 from .scenario_player import ScenarioPlayer
 
@@ -82,12 +82,9 @@ class RigSession:
         self.sensors = session_sensors(self.p, self.rig.dt_s, sensor_profile)
         self.sensors.warm_up()
         self.with_clock = bool(self.p.get("publish_clock", False))
-        self.encoders = RigEncoders(self.with_clock)
-        self.outputs = self.encoders.topics            # in publishing order
-        # each ~/measured/ output's channels (indices into the sensors' CHANNELS)
-        self._channels_of = [(k, tuple(CHANNELS.index(f.sample) for f in t.fields))
-                             for k, t in enumerate(self.outputs) if self.encoders.measured[k]]
-        self.set_live([True] * len(self.outputs))
+        self.tick_outputs = TickOutputs(self.with_clock,
+                                        self.p.get("measured_publish") == "on_sample")
+        self.outputs = self.tick_outputs.topics        # in publishing order
         self.offset_s = 0.0                      # simulated time before the last reset
         self.paused = bool(self.p.get("start_paused", False))
         self.superseded = 0                      # commands replaced within their tick
@@ -101,7 +98,6 @@ class RigSession:
                            self.back_to_back(self.p), self.p.get("diagnostics_period_s", 1.0),
                            self.rig.time_s, clock=clock)
         self._steps_per_tick = self._tick_steps(self.p.get("rate_hz", 1000.0))
-        self._on_sample = self.p.get("measured_publish") == "on_sample"
         self.last_command_s = clock()
         self.player: ScenarioPlayer | None = None
         self.switch_pending = None              # a controller switch not yet confirmed
@@ -212,46 +208,17 @@ class RigSession:
         return True
 
     def set_live(self, live: Sequence[bool]) -> None:
-        """Which outputs are published (and, not recording, encoded); their places, exact
-        and measured apart (``emit``)."""
-        measured = self.encoders.measured
-        self._live_at = [k for k, on in enumerate(live) if on]
-        self._live_exact_at = [k for k in self._live_at if not measured[k]]
-        self._live_measured_at = [k for k in self._live_at if measured[k]]
+        """Which outputs are published (and, not recording, encoded)."""
+        self.tick_outputs.set_live(live)
 
     def emit(self, send: Sequence[Send]) -> int:
-        """The current sample measured and encoded once: each live output's bytes handed to
-        ``send[k]`` (its publisher), and the very same bytes recorded; its stamp [ns].
-
-        Not recording, the exact outputs are sent before the sensors measure (every tick:
-        their state goes on whether or not anyone listens), then the measured ones: the same
-        order (the table lists ``~/measured/`` last), but a lockstep controller that reads
-        exact outputs gets them ~15 us sooner and works while the node measures. With
-        ``measured_publish:=on_sample`` a ``~/measured/`` output none of whose channels took
-        a fresh value is neither sent nor recorded."""
+        """The current sample measured and encoded once, each live output's bytes handed to
+        ``send[k]`` (its publisher) and the very same bytes recorded (``TickOutputs.emit``);
+        in lockstep, the tick's answers awaited from here. Its stamp [ns]."""
         stamp = self.stamp_ns()
         s = self.rig.sample()
-        enc = self.encoders
-        if self.recorder is None:
-            at = self._live_exact_at
-            for k, raw in zip(at, enc.some(stamp, s, None, at), strict=True):
-                send[k](raw)
-            self.last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
-            if self._on_sample and (held := self._held(self.last[2])):
-                at = [k for k in self._live_measured_at if k not in held]
-            else:
-                at = self._live_measured_at
-            if at:
-                for k, raw in zip(at, enc.some(*self.last, at), strict=True):
-                    send[k](raw)
-        else:
-            self.last = (stamp, s, self.sensors.measure(self.rig.time_s, s))
-            data = enc.sample(*self.last)
-            held = self._held(self.last[2]) if self._on_sample else ()
-            for k in self._live_at:
-                if k not in held:
-                    send[k](data[k])
-            self.recorder.record_outputs(data, held)
+        m = self.tick_outputs.emit(stamp, s, self.sensors, self.rig.time_s, self.recorder, send)
+        self.last = (stamp, s, m)
         if self.lockstep is not None:
             self.lockstep.wait_for(stamp, self.clock())
         return stamp
@@ -260,12 +227,7 @@ class RigSession:
         """The last sample's outputs sent again to every output (not recorded again): a
         lockstep tick overdue, for a controller that started or restarted late."""
         if self.last is not None:
-            for k, raw in enumerate(self.encoders.sample(*self.last)):
-                send[k](raw)
-
-    def _held(self, m: Measured) -> tuple[int, ...]:
-        fresh = m.fresh
-        return tuple(k for k, channels in self._channels_of if not any(fresh[c] for c in channels))
+            self.tick_outputs.again(self.last, send)
 
     def tick(self, send: Sequence[Send] | None = None) -> bool:
         """One tick, as lockstep and max speed run it: advance one tick and emit its sample
@@ -383,7 +345,7 @@ class RigSession:
         if "rate_hz" in new:
             self.pacer.configure(new["rate_hz"], new["real_time_factor"], self.back_to_back(new))
             self._steps_per_tick = self._tick_steps(new["rate_hz"])
-        self._on_sample = new.get("measured_publish") == "on_sample"
+        self.tick_outputs.on_sample = new.get("measured_publish") == "on_sample"
         if self.lockstep is not None:
             self.lockstep.timeout_s = new["lockstep_timeout_s"]
         if changed & set(SPLITS) and self.recorder is not None:

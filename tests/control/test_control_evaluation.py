@@ -215,3 +215,56 @@ def test_metrics_of_a_recording_worked_by_hand():
     assert (r.law, r.scenario) == ("x", "y")
     assert math.isnan(sample_metrics(preset, series, 0.3, None, law="x",
                                      scenario="y").saturation_fraction)
+
+
+def test_the_scenario_set_is_the_documented_one():
+    """msg_docs/control.md's table: set-points at telling times, windows, the switch."""
+    from drill_sim.control.scenarios import STANDARD, named
+    grid = named(["grid"])
+    assert [(s.name, s.duration_s, s.metrics_from_s) for s in grid] == [
+        (f"grid_{r}rpm_{w}kN", 40.0, 20.0) for r in (40, 60, 90) for w in (80, 100, 120)]
+    for s, (r, w) in zip(grid, [(r, w) for r in (40, 60, 90) for w in (80, 100, 120)],
+                         strict=True):
+        speed, wob = s.values(np.array([0.0, 39.0]))
+        assert list(speed) == pytest.approx([r * RPM] * 2) and list(wob) == [w, w]
+    [step] = named(["wob_step"])
+    _, wob = step.values(np.array([0.0, 20.0, 20.5, 21.0, 50.0]))
+    assert list(wob) == pytest.approx([80, 80, 100, 120, 120])
+    assert (step.duration_s, step.metrics_from_s) == (50.0, 25.0)
+    [ramp] = named(["speed_ramp"])
+    speed, wob = ramp.values(np.array([0.0, 10.0, 25.0, 40.0, 50.0]))
+    assert list(speed / RPM) == pytest.approx([120, 120, 80, 40, 40])
+    assert list(wob) == [100.0] * 5 and (ramp.duration_s, ramp.metrics_from_s) == (50.0, 20.0)
+    [on] = named(["switch_on"])
+    assert (on.switch_on_s, on.duration_s, on.metrics_from_s) == (20.0, 60.0, 35.0)
+    speed, wob = on.values(np.array([0.0, 60.0]))
+    assert list(speed / RPM) == pytest.approx([60, 60]) and list(wob) == [100.0, 100.0]
+    assert [s.name for s in named(["standard"])] == [s.name for part in STANDARD
+                                                       for s in named([part])]
+
+
+def test_a_result_row_and_several_laws_on_one_scenario():
+    from drill_sim.control.closed_loop import run_laws
+    scenario = Scenario.steady(60.0, 100.0, duration_s=0.2, window_start_s=0.1)
+    results = run_laws("base", scenario, ["stiff_pi", "z_torque"],
+                       gains={"z_torque": {"alpha": 0.5}})
+    assert [r.law for r in results] == ["stiff_pi", "z_torque"]
+    alone = run_loop("base", scenario, LoopSettings(law="z_torque", gains={"alpha": 0.5}))
+    assert (results[1].series["law_output"] == alone.series["law_output"]).all()
+    row = results[1].row()
+    assert "series" not in row and row["mean_rop"] == row["mean_rop_m_h"]
+    assert row["mse_mpa"] == pytest.approx(row["mse_pa"] * 1e-6)
+    assert row["law"] == "z_torque" and row["ssi"] == results[1].ssi
+
+
+def test_a_law_takes_the_drives_limits_unless_its_gains_set_them():
+    from drill_sim.control.evaluation import build_law
+    from drill_sim.core.top_drive import TopDriveParameters
+    drive = TopDriveParameters(motor_torque_max_nm=3e4, motor_torque_min_nm=-1e4)
+    base = load_preset("base")
+    law = build_law(base, LoopSettings(law="stiff_pi"), drive)
+    assert (law.pi.torque_min_nm, law.pi.torque_max_nm) == (-1e4, 3e4)
+    law = build_law(base, LoopSettings(law="stiff_pi", gains={"torque_max_nm": 5e3}), drive)
+    assert (law.pi.torque_min_nm, law.pi.torque_max_nm) == (-1e4, 5e3)
+    assert law.h_s == 1e-3 and law.top_drive_inertia_kg_m2 == drive.top_drive_inertia_kg_m2
+    assert build_law(base, LoopSettings(law="kinematic"), drive).name == "kinematic"
