@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from . import bit_rock
 from . import kernel as kn
 from .bit_rock import REGIME_STUCK, _bit_rock_law, _surface_at, _sweep
 from .kernel import (
@@ -40,6 +41,9 @@ from .kernel import (
     _load_drive,
     _store_drive,
 )
+from .numba_cache import follow
+
+follow(__file__, kn.__file__, bit_rock.__file__)   # the cache follows what it inlines
 
 # extra float state (after the lumped kernel's X_*, which keep their meaning; X_TS is the
 # surface torque at the top of the string)

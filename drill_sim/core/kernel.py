@@ -40,10 +40,14 @@ import math
 import numpy as np
 from numba import njit
 
+from . import bit_rock
 from .bit_rock import REGIME_OFF_BOTTOM as REGIME_OFF_BOTTOM  # the regimes, read here as kn.*
 from .bit_rock import REGIME_ROTATING as REGIME_ROTATING
 from .bit_rock import REGIME_STUCK as REGIME_STUCK
 from .bit_rock import _bit_rock_law, _surface_at, _sweep  # the bit on the rock, shared
+from .numba_cache import follow
+
+follow(__file__, bit_rock.__file__)       # this file's cache follows the laws it inlines
 
 # float state x
 X_TAU, X_U, X_V, X_PHI, X_OMEGA, X_PHI_TD = 0, 1, 2, 3, 4, 5

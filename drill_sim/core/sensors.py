@@ -35,6 +35,8 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
+from . import stick_slip
+from .numba_cache import follow
 from .parameters import ParameterError
 from .sensor_profile import (
     CHANNELS,
@@ -45,6 +47,7 @@ from .sensor_profile import (
 )
 from .stick_slip import severity_index
 
+follow(__file__, stick_slip.__file__)       # the cache follows the SSI it compiles
 _severity_index = nb.njit(cache=True)(severity_index)
 SEVERITY_MAX = 10.0          # the severity shown when the bit's mean speed over a window is <= 0
 NOISE_BLOCK = 4096           # normal deviates drawn at a time, per channel
