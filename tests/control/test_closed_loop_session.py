@@ -103,7 +103,7 @@ def test_a_hook_load_scenario_is_refused_by_the_evaluation(base):
 def test_the_evaluation_takes_the_rigs_shipped_scenarios_by_name():
     from drill_sim.control.scenarios import named
     [on] = named(["controller_on"])
-    assert on.switch_on_s == 35.0 and on.metrics_from_s == 35.0
+    assert on.switch_on_s == 35.0 and on.metrics_from_s == 50.0      # its window_start_s
     with pytest.raises(ParameterError, match="controller_on"):      # the refusal lists them
         named(["no_such_set"])
 
