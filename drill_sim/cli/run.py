@@ -35,12 +35,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenario", default="controller_on",
                         help="shipped scenario or YAML file (default controller_on: the driller "
                              "drills into stick-slip, Z-Torque is switched on and clears it)")
-    parser.add_argument("--preset", default="base", help="rig preset or preset YAML file")
+    parser.add_argument("--preset", default="base",
+                        help="rig preset or preset YAML file (default base)")
     parser.add_argument("--duration", type=number, default=None,
                         help=f"wall seconds to run, up to {MAX_DURATION_S:g}; default: the "
-                             "scenario's duration")
+                             "scenario's duration (the rig runs in real time: about as many "
+                             "simulated seconds, a little more as it ticks while the "
+                             "programs start)")
     parser.add_argument("--plot", type=Path, default=Path("drill_sim.png"),
-                        help="figure written at the end (.png, .pdf, .svg...)")
+                        help="figure written at the end (.png, .pdf, .svg...; default "
+                             "drill_sim.png)")
     parser.add_argument("--record", type=Path, default=None, metavar="BAG",
                         help="bag directory to record the session into (default: "
                              "drill_sim_session_<date>-<time> here)")
