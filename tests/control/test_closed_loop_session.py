@@ -170,3 +170,85 @@ def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base):
     on_limit = [abs(abs(o) - 6e4) < 1e-4 for o in law_out[600:]]
     assert result.saturation_fraction == pytest.approx(sum(on_limit) / len(on_limit))
     assert result.saturation_time_s == pytest.approx(result.saturation_fraction * 0.4)
+
+
+def test_a_kinematic_loop_is_the_rig_commanded_by_hand_and_its_bag_holds_each_command_once(
+        base, tmp_path):
+    """The kinematic row: set-point and hook load k held over k..k+1 on a bare ``Rig``; the
+    bag holds each command as a driver sends it (its one component, stamped at the tick it
+    was given) and once per change, not once per tick."""
+    from drill_sim.bag.bag import opened
+    from drill_sim.control.closed_loop import session_parameters, tick_commands
+    from drill_sim.session import rules
+    from drill_sim.wire import cdr, rig_topics
+    scenario = Scenario.of_points("ramps", ((0.0, 60.0), (0.1, 60.0), (0.3, 70.0)),
+                                  ((0.0, 100.0), (0.2, 100.0), (0.25, 110.0)),
+                                  duration_s=0.4, window_start_s=0.2)
+    settings = LoopSettings(law="kinematic")
+    result = run_loop(base, scenario, settings, record=tmp_path / "k")
+    p = session_parameters(base, scenario, settings)
+    rig = rules.make_rig(p)
+    rules.start(rig, p)
+    speed, hook = tick_commands(base, scenario, 1e-3)
+    bit = [rig.sample().bit_speed_rad_s]
+    for k in range(1, speed.size):
+        rig.command(float(speed[k - 1]), float(hook[k - 1]))
+        rig.advance_steps(round(1e-3 / rig.dt_s))
+        bit.append(rig.sample().bit_speed_rad_s)
+    assert list(result.series["bit_speed_rad_s"]) == bit
+    assert list(result.series["law_output"]) == list(speed)        # the pass-through
+
+    sent = {"top_drive": [], "hook_load": []}
+    with opened(tmp_path / "k") as bag:
+        for m in bag.messages():
+            for rule in sent:
+                topic = rig_topics.COMMAND_BY_RULE[rule]
+                if m.topic == topic.under("/" + rig_topics.NODE_NAME):
+                    _, sec, nsec, six = cdr.decode_command(topic.type_name, m.data)
+                    sent[rule].append((sec + nsec * 1e-9, six))
+    for rule, values, place in (("top_drive", speed, 5), ("hook_load", hook, 2)):
+        changes = [k for k in range(speed.size - 1) if k == 0 or values[k] != values[k - 1]]
+        assert len(sent[rule]) == len(changes), rule               # once per change
+        for (stamp_s, six), k in zip(sent[rule], changes, strict=True):
+            assert stamp_s == pytest.approx(k * 1e-3, abs=1e-9)    # given at tick k
+            assert six[place] == values[k]
+            assert [v for i, v in enumerate(six) if i != place] == [0.0] * 5
+
+
+def test_the_loops_session_parameters_are_the_settings_and_the_scenarios(base):
+    """What the loop's rig session is built from: its tick, start, drive, string and sensors."""
+    from drill_sim.control.closed_loop import session_parameters
+    from drill_sim.core.top_drive import TopDriveParameters
+    drive = TopDriveParameters(top_drive_inertia_kg_m2=1234.0, motor_torque_max_nm=5e4,
+                               motor_torque_min_nm=-4e4, drive_kp_nm_s_rad=1e4)
+    scenario = Scenario.of_points("s", ((0.0, 60.0),), ((0.0, 90.0),), duration_s=2.0,
+                                  window_start_s=1.0, start_rpm=55.0)
+    settings = LoopSettings(law="z_torque", sample_period_s=2e-3, top_drive=drive,
+                            string_model="distributed", sensor_profile="surface_rig",
+                            sensor_seed=7, perturbation=0.01)
+    p = session_parameters(base, scenario, settings)
+    assert p["rate_hz"] == 500.0 and p["max_speed"] is True and p["publish_clock"] is True
+    assert p["initial_top_drive_speed_rad_s"] == pytest.approx(55.0 * 2 * math.pi / 60)
+    assert p["initial_weight_on_bit_n"] == 90e3 and p["initial_state"] == "steady"
+    assert p["initial_perturbation"] == 0.01
+    assert (p["string_model"], p["sensor_profile"], p["sensor_seed"]) == (
+        "distributed", "surface_rig", 7)
+    assert (p["top_drive_mode"], p["top_drive_inertia_kg_m2"], p["motor_torque_max_nm"],
+            p["motor_torque_min_nm"]) == ("torque", 1234.0, 5e4, -4e4)
+    assert p["motor_torque_rate_nm_s"] == 0.0            # the table's "no rate limit"
+    assert p["max_top_drive_speed_rad_s"] >= 40.0        # a set-point ramp up to 380 rpm
+    assert session_parameters(base, Scenario.steady(60.0, 90.0), settings)[
+        "initial_top_drive_speed_rad_s"] == pytest.approx(60.0 * 2 * math.pi / 60)
+    for bad in (0.0, 1.5, math.nan):
+        with pytest.raises(ParameterError, match="sample_period_s"):
+            session_parameters(base, scenario, LoopSettings(law="z_torque",
+                                                            sample_period_s=bad))
+
+
+@pytest.mark.parametrize(("duration_s", "every"), [(0.2, 1), (0.6, 3)])
+def test_progress_is_the_fraction_done_about_200_times(base, duration_s, every):
+    seen = []
+    run_loop(base, Scenario.steady(60.0, 100.0, duration_s=duration_s, window_start_s=0.1),
+             LoopSettings(law="kinematic"), progress=seen.append)
+    n = round(duration_s / 1e-3)
+    assert seen == [k / n for k in range(every, n + 1, every)]
