@@ -233,7 +233,7 @@ def test_corrupted_bytes_never_crash_the_reader(tmp_path, position):
     assert all(p.startswith("bad_0.mcap: ") for p in found.problems)
 
 
-@pytest.mark.parametrize("position", [0.1, 0.3, 0.5, 0.7, 0.9])
+@pytest.mark.parametrize("position", [0.1, 0.5, 0.9])       # early, middle, late
 def test_corrupted_rig_bag_is_read_up_to_the_damage_by_the_fast_paths(tmp_path, position):
     """The memory-mapped walk (replay, resim) and the numpy path (metrics) check each chunk's
     CRC: damaged bytes are skipped with a problem, never a crash or wrong values."""

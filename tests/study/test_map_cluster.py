@@ -19,6 +19,7 @@ def cluster():
         yield local
 
 
+@pytest.mark.process          # two worker processes (multiprocessing, not a subprocess call)
 def test_a_local_dask_cluster_computes_the_same_map(tmp_path, cluster, capsys):
     here, there = tmp_path / "here.csv", tmp_path / "there.csv"
     assert main([*MAP, "--workers", "1", "--out", str(here)]) == 0
