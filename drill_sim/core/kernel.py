@@ -44,7 +44,13 @@ from . import bit_rock
 from .bit_rock import REGIME_OFF_BOTTOM as REGIME_OFF_BOTTOM  # the regimes, read here as kn.*
 from .bit_rock import REGIME_ROTATING as REGIME_ROTATING
 from .bit_rock import REGIME_STUCK as REGIME_STUCK
-from .bit_rock import _bit_rock_law, _surface_at, _sweep  # the bit on the rock, shared
+from .bit_rock import (  # the bit on the rock, shared
+    _bit_rock_law,
+    _blade_height,
+    _first_swept_node,
+    _surface_at,
+    _sweep,
+)
 from .numba_cache import follow
 
 follow(__file__, bit_rock.__file__)       # this file's cache follows the laws it inlines
@@ -422,8 +428,23 @@ def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
             v_bar = 0.5 * (v + v_new)
             om_bar = 0.5 * (om + om_new)
             u_new = u_m + h2 * v_new
-            k_last, s_behind, hole = _sweep(surf, mask, n_nodes, dth, inv_dth, k_last, s_behind,
-                                            hole, phi, phi_new, u, u_new)
+            # the blades sweep the rock (``bit_rock._sweep``, written out here: in this loop
+            # a helper taking the surface array costs a quarter of the speed, 29 -> 22 M steps/s)
+            k_new = np.int64(math.floor(phi_new * inv_dth))
+            if k_new > k_last:
+                dphi = phi_new - phi
+                for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
+                    uc = _blade_height(kk * dth, phi, dphi, u, u_new)
+                    j = kk & mask
+                    s_behind = surf[j]             # the node's value before this pass
+                    if uc > s_behind:
+                        surf[j] = uc
+                        if uc > hole:
+                            hole = uc
+                k_last = k_new
+            elif k_new < k_last:
+                k_last = k_new
+                s_behind = surf[k_new & mask]
             a = _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, f_hoist)
             sum_w += w              # what a sensor sees: forces averaged over its sample
             sum_t += t              # (and, folded in at each sample, the window's integrals)
