@@ -1,4 +1,4 @@
-"""``drill_sim``: offline simulation and stability analysis from a terminal.
+"""``drill_sim``: the rig with a controller, controller scores, simulations, maps, bags.
 
 One module per command, each with ``add_arguments(parser)`` and ``run(args) -> int``, wired here
 as subcommands. Bad arguments exit with status 2 and one line on stderr.
