@@ -215,8 +215,8 @@ def run_settings(case: Case, timing: Timing, start: str | None, gap: float,
                              "heavier --top-drive-inertia")
         if start == "steady":
             t0 = steady_state(case.groups, case.w0, case.omega0).t0
-            if waves is not None:           # the torque at the top: the dashpots' share too
-                t0 += float(waves.torsion.dashpot.sum()) * case.omega0
+            if waves is not None:           # the torque at the top of the pipe
+                t0 = waves.steady_top_torque(t0, case.omega0)
             if not groups.holds(t0):
                 c = rig.torsional_stiffness_nm_per_rad
                 raise UsageError(f"--start steady{where}: steady drilling needs a motor torque of "

@@ -12,6 +12,7 @@ from ..core.stability import stability
 from .case import OMEGA0_MAX, RPM_MAX, Case, add_model_arguments, resolve_case
 from .checks import in_range, integer, json_line, number, typed
 from .errors import UsageError
+from .single import add_drive_arguments
 from .stability_string import run_distributed
 
 # The documented limits (msg_docs/cli.md, "Limits").
@@ -29,8 +30,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="print the result as one JSON object (strict: null, never NaN)")
     parser.add_argument("--string-model", choices=STRING_MODELS, default=None,
                         help="lumped: the roots of Delta(s); distributed (SI mode): those of "
-                             "Delta_d(s) and the string's natural frequencies; default: the "
-                             "preset's")
+                             "Delta_d(s), the string's natural frequencies and its damped modes "
+                             "off bottom with the top drive's boundary; default: the preset's")
+    add_drive_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -54,6 +56,12 @@ def run(args: argparse.Namespace) -> int:
     model = args.string_model or (case.preset.string_model if case.si else "lumped")
     if model == "distributed":
         return run_distributed(args, case, steady, re_min)
+    drive_options = [a for a in vars(args) if a.startswith(("top_drive", "drive_", "motor_"))
+                     and getattr(args, a) is not None]
+    if drive_options:
+        raise UsageError(f"--{drive_options[0].replace('_', '-')}: the top drive is the boundary "
+                         "of the distributed string's modes; expected it with --string-model "
+                         "distributed")
     _check_root_search(args, case, re_min)
     try:
         res = stability(case.groups, case.w0, case.omega0, re_min=re_min)

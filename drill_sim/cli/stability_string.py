@@ -1,6 +1,7 @@
 """``drill_sim stability --string-model distributed``: the roots of the distributed string's
-characteristic equation Delta_d(s) in a box, how their count was checked, and the string's
-natural frequencies off bottom."""
+characteristic equation Delta_d(s) in a box, how their count was checked, the string's
+natural frequencies off bottom, and its damped modes off bottom with the top drive's boundary
+(the continuously damped pipe's exact roots)."""
 
 from __future__ import annotations
 
@@ -8,21 +9,28 @@ import argparse
 import math
 
 from ..core import DEFAULT_DT, ParameterError, SteadyState
-from ..core.stability_distributed import natural_frequencies, string_stability
+from ..core.distributed import geometry_waves
+from ..core.stability_distributed import natural_frequencies, string_modes, string_stability
 from .case import Case
 from .checks import json_line
 from .errors import UsageError
-from .single import string_waves
+from .single import resolve_drive, string_waves
 
 RE_MAX = 5.0         # right edge of the search box [1/t*]
 IM_MAX = 20.0        # half-height of the search box [1/t*]: roots above are not searched
 TORSIONAL_MODES, AXIAL_MODES = 3, 2
+DAMPED_MODES = 5     # damped modes reported of each family
 
 
 def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
                     re_min: float) -> int:
     """Print (or --json) the distributed string's stability at ``case``."""
-    waves = string_waves(case, "distributed", DEFAULT_DT)   # UsageError in groups mode
+    string_waves(case, "distributed", DEFAULT_DT)   # UsageError in groups mode, no geometry
+    drive = resolve_drive(args, case)
+    assert drive is not None                            # SI mode
+    rig = case.preset.rig
+    # the exact damped pipe: the roots and the modes are the string's, not its simulation's
+    waves = geometry_waves(rig, case.preset.string, DEFAULT_DT, continuous=True)
     try:
         res = string_stability(case.groups, waves, case.w0, case.omega0, re_min=re_min,
                                re_max=RE_MAX, im_max=IM_MAX)
@@ -33,6 +41,15 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
     tors, axial = natural_frequencies(waves, case.groups.psi, count=TORSIONAL_MODES)
     hz = 1.0 / (2.0 * math.pi * t_star)
     roots = [[float(r.real), float(r.imag)] for r in res.roots]
+    try:
+        damped = string_modes(waves, case.groups.psi,
+                              drive.top_drive.groups(rig.scales, rig.bha_inertia_kg_m2),
+                              count=DAMPED_MODES)
+    except ParameterError as exc:
+        raise UsageError(f"--string-model distributed, the damped modes: {exc}") from None
+    modes = [{"kind": m.kind, "frequency_hz": m.frequency * hz,
+              "damping_ratio": m.damping_ratio}
+             for m in (*damped.torsional, *damped.axial)]
     out = {"steady_drilling": True, "string_model": "distributed", "w0": case.w0,
            "omega0": case.omega0, "delta_n0": steady.delta_n0, "v0": steady.v0, "t0": steady.t0,
            "tau_n0": steady.tau_n0, "stable": res.stable, "roots": roots[:args.count],
@@ -42,8 +59,12 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
                            f"{IM_MAX:g} are not searched",
            "torsional_frequencies_hz": [float(f * hz) for f in tors],
            "axial_frequencies_hz": [float(f * hz) for f in axial[:AXIAL_MODES]],
+           "modes": modes, "modes_complete": damped.complete,
+           "modes_boundary": f"bit off bottom, hook force held, top drive "
+                             f"{drive.top_drive.top_drive_mode}",
            "units": "dimensionless: s in 1/t*, v0 in L*/t*, t0 in C, delta_n0 in L*; "
-                    "frequencies in Hz", "t_star_s": t_star}
+                    "frequencies in Hz (modes: the damped frequency Im s / 2 pi, damping ratio "
+                    "-Re s / |s|)", "t_star_s": t_star}
     if args.json:
         print(json_line(out))
         return 0
@@ -61,4 +82,9 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
     print("natural frequencies off bottom (bit free, top speed and hook force held):")
     print("  torsional " + ", ".join(f"{f:.3f}" for f in out["torsional_frequencies_hz"]) +
           " Hz; axial " + ", ".join(f"{f:.3f}" for f in out["axial_frequencies_hz"]) + " Hz")
+    print(f"damped modes off bottom ({out['modes_boundary']}; frequency Hz / damping ratio %), "
+          f"{'all' if damped.complete else 'NOT all'} found:")
+    for kind in ("torsional", "axial"):
+        print(f"  {kind:9} " + ", ".join(f"{m['frequency_hz']:.3f} / {100 * m['damping_ratio']:.2f}"
+                                        for m in modes if m["kind"] == kind))
     return 0

@@ -26,6 +26,10 @@ from .parameters import ParameterError, RigParameters, StringGeometry, check_num
 
 STRING_MODELS = ("lumped", "distributed")
 DAMPING_STATIONS = 8        # dashpots per section when it is damped (none when undamped)
+# the share of the material's damping that the low-pass on every passage carries (tau^2 =
+# share eta D); the relative dashpots carry 1 - share/2 of it, so that the two give the
+# whole at low frequency (where a standing wave's low-pass loss is half a travelling one's)
+PASSAGE_SHARE = 0.2
 
 
 def check_string_model(name: object) -> str:
@@ -38,19 +42,23 @@ def check_string_model(name: object) -> str:
 
 @dataclass(frozen=True)
 class Section:
-    """A uniform tube of the pipe, SI. Damping per unit length: torsional [N m s/rad per m],
-    axial [N s/m per m]; 0 (the default) is a lossless section."""
+    """A uniform tube of the pipe, SI. Viscous damping per unit length: torsional [N m s/rad
+    per m], axial [N s/m per m]; material (Kelvin-Voigt) retardation times [s]: the shear
+    stress is G (strain + eta strain rate), likewise E axially. 0 (the defaults): lossless."""
 
     length_m: float
     od_m: float
     id_m: float
     torsional_damping: float = 0.0
     axial_damping: float = 0.0
+    torsional_retardation_s: float = 0.0
+    axial_retardation_s: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("length_m", "od_m"):
             object.__setattr__(self, name, check_number(name, getattr(self, name)))
-        for name in ("id_m", "torsional_damping", "axial_damping"):
+        for name in ("id_m", "torsional_damping", "axial_damping", "torsional_retardation_s",
+                     "axial_retardation_s"):
             object.__setattr__(self, name, check_number(name, getattr(self, name),
                                                         low_inclusive=True))
         if self.id_m >= self.od_m:
@@ -67,9 +75,11 @@ class Section:
 
 def pipe_sections(geometry: StringGeometry, torsional_damping: float = 0.0,
                   axial_damping: float = 0.0) -> tuple[Section, ...]:
-    """The pipe of a preset's geometry as one section (the collars are the rigid BHA)."""
+    """The pipe of a preset's geometry as one section (the collars are the rigid BHA), with
+    the viscous damping given and the geometry's material damping."""
     return (Section(geometry.pipe_length_m, geometry.pipe_od_m, geometry.pipe_id_m,
-                    torsional_damping, axial_damping),)
+                    torsional_damping, axial_damping, geometry.torsional_retardation_time_s,
+                    geometry.axial_retardation_time_s),)
 
 
 @dataclass(frozen=True)
@@ -79,7 +89,17 @@ class WaveLine:
     z: impedance of each segment; delay: its travel time [t*]; steps, frac: the travel time in
     steps, whole and fraction (steps + frac = delay/h; a segment shorter than a step is
     simulated as one step, steps 1 and frac 0); dashpot: at the segment's bottom (the last one
-    acts on the BHA)."""
+    acts on the BHA). relative: a dashpot [C t*] across the segment, between its two ends (in
+    parallel with its stiffness: the material's Kelvin-Voigt damping lumped at the stations);
+    tau: the time constant of a low-pass every passage through the segment goes through, the
+    ring buffer's travel time shortened by tau (``distributed_kernel``): the share of the
+    material's damping that acts on short waves, which dashpots at the stations cannot reach
+    where every station is a node. eta: the material's retardation time [t*] (stress
+    G (strain + eta strain rate)) and nu: viscous damping per unit length over inertia per
+    unit length [1/t*], both continuous along the segment: the theory's exact pipe
+    (``string_waves(..., continuous=True)``); the simulation's lines carry the damping as
+    ``dashpot``, ``relative`` and ``tau`` instead (eta, nu 0).
+    """
 
     z: np.ndarray
     delay: np.ndarray
@@ -87,31 +107,67 @@ class WaveLine:
     dashpot: np.ndarray
     h: float
     frac: np.ndarray | None = None
+    relative: np.ndarray | None = None
+    tau: np.ndarray | None = None
+    eta: np.ndarray | None = None
+    nu: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        if self.frac is None:
-            object.__setattr__(self, "frac", np.zeros(np.size(self.steps)))
+        for name in ("frac", "relative", "tau", "eta", "nu"):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.zeros(np.size(self.z)))
 
     @property
     def simulated_delay(self) -> np.ndarray:
-        """The travel times the simulation uses, (steps + frac) h [t*]."""
-        return (self.steps + self.frac) * self.h
+        """The travel times the simulation gives at low frequency, (steps + frac) h + tau [t*]
+        (the low-pass's group delay is tau)."""
+        return (self.steps + self.frac) * self.h + self.tau
 
     @property
     def delay_error(self) -> float:
         """Largest relative error of a segment's simulated travel time vs delay."""
         return float(np.max(np.abs(self.simulated_delay - self.delay) / self.delay))
 
+    def lossless(self) -> WaveLine:
+        """The same line without any damping (the travel times the geometry's)."""
+        return WaveLine(self.z, self.delay, self.steps, np.zeros(np.size(self.z)), self.h,
+                        self.frac)
+
     def transfer(self, s: complex | np.ndarray) -> tuple:
         """Top-to-bottom transfer matrix (m11, m12, m21, m22) of (angle, torque) at Laplace
-        variable s: segment [[cosh sD, -sinh sD/(z s)], [-z s sinh sD, cosh sD]], dashpot
-        [[1, 0], [-c s, 1]]. Torque is the one the part above exerts on the part below."""
+        variable s. A segment: with r = sqrt(s (s + nu)), q = sqrt(1 + eta s), g = D r / q and
+        W = z r q (G J gamma of the damped tube), [[cosh g, -sinh g / W], [-W sinh g, cosh g]]
+        (lossless: g = s D, W = z s); with a low-pass tau (the simulation's lines), W = z s
+        and g = s (D - tau) + log(1 + s tau); then its relative dashpot in parallel; a dashpot
+        [[1, 0], [-c s, 1]]. Torque is the one the part above exerts on the part below. Even
+        in r and in q, so the branches do not matter; entire in s but for the branch point
+        s = -1/eta far to the left."""
         s = np.asarray(s, dtype=complex)
         m11, m12, m21, m22 = np.ones_like(s), np.zeros_like(s), np.zeros_like(s), np.ones_like(s)
-        for z, d, c in zip(self.z, self.delay, self.dashpot, strict=True):
-            ch, sh = np.cosh(s * d), np.sinh(s * d)
-            sh_over_s = d * np.sinc(1j * s * d / np.pi)        # sinh(sD)/s, D at s = 0
-            a11, a12, a21, a22 = ch, -sh_over_s / z, -z * s * sh, ch
+        for z, d, c, rel, tau, eta, nu in zip(self.z, self.delay, self.dashpot, self.relative,
+                                              self.tau, self.eta, self.nu, strict=True):
+            if tau > 0.0:              # the buffer's D - tau, then the low-pass 1/(1 + s tau)
+                with np.errstate(all="ignore"):
+                    g_over_s = np.where(s == 0.0, d, d - tau + np.log1p(s * tau) / s)
+                g = s * g_over_s
+                sh_over_g = np.sinc(1j * g / np.pi)
+                a11, a12 = np.cosh(g), -sh_over_g * g_over_s / z
+                a21, a22 = -z * s * s * g_over_s * sh_over_g, a11
+            else:
+                q2 = 1.0 + eta * s
+                r = np.sqrt(s * (s + nu))
+                g = d * r / np.sqrt(q2)
+                ch = np.cosh(g)
+                sh_over_g = np.sinc(1j * g / np.pi)            # sinh(g)/g, 1 at g = 0
+                a11, a12 = ch, -sh_over_g * d / (z * q2)      # sinh g / W = (sinh g/g) D/(z q^2)
+                a21, a22 = -z * d * r * r * sh_over_g, ch      # W sinh g = z D r^2 sinh(g)/g
+            if rel > 0.0:                                      # T = T_tube + rel s (phi1 - phi2)
+                rs = rel * s
+                e = 1.0 - rs * a12
+                n11, n12 = (a11 - rs * a12) / e, a12 / e
+                a21, a22 = (a21 + (a22 - 1.0) * rs * (n11 - 1.0),
+                            a22 * (1.0 + rs * n12) - rs * n12)
+                a11, a12 = n11, n12
             m11, m12, m21, m22 = (a11 * m11 + a12 * m21, a11 * m12 + a12 * m22,
                                   a21 * m11 + a22 * m21, a21 * m12 + a22 * m22)
             m21, m22 = m21 - c * s * m11, m22 - c * s * m12
@@ -131,6 +187,12 @@ class StringWaves:
         """Polar inertia of the pipe over the BHA's, sum of z D."""
         return float(np.sum(self.torsion.z * self.torsion.delay))
 
+    def steady_top_torque(self, bit_torque: float, omega0: float) -> float:
+        """The torque at the top of the string turning steadily at ``omega0`` [1/t*] with
+        ``bit_torque`` [C] on the BHA: that plus every dashpot's c omega0 (the relative dashpots
+        and the low-passes carry nothing in a steady turn)."""
+        return bit_torque + float(np.sum(self.torsion.dashpot)) * omega0
+
     @property
     def pipe_mass(self) -> float:
         """Mass of the pipe over the BHA's, times psi: sum of z_a D_a (psi m_p/M)."""
@@ -140,42 +202,66 @@ class StringWaves:
 def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float, *,
                  shear_modulus_pa: float = 77e9, young_modulus_pa: float = 200e9,
                  steel_density_kg_m3: float = 8000.0,
-                 stations: int = DAMPING_STATIONS) -> StringWaves:
+                 stations: int = DAMPING_STATIONS, continuous: bool = False) -> StringWaves:
     """The dimensionless wave lines of ``sections`` (top first) with the scales of ``params``
-    (t* = sqrt(I/C) from the lumped C, I), at step ``h`` [t*]."""
+    (t* = sqrt(I/C) from the lumped C, I), at step ``h`` [t*]. ``continuous``: the theory's
+    exact pipe (one segment per section, viscous damping continuous along it, no stations),
+    whose ``transfer`` the modes and the tests use; otherwise the simulation's lines."""
     if not sections:
         raise ParameterError("sections: expected at least one pipe section")
     sc = params.scales
     ts, c_scale = sc.time_s, sc.stiffness_nm_per_rad
     rho = steel_density_kg_m3
     lines = []
-    for modulus, prop, damp, imp_scale in (
-            (shear_modulus_pa, "polar_moment_m4", "torsional_damping", c_scale * ts),
-            (young_modulus_pa, "area_m2", "axial_damping", sc.force_n * ts / sc.length_m)):
+    for modulus, prop, damp, retard, imp_scale in (
+            (shear_modulus_pa, "polar_moment_m4", "torsional_damping", "torsional_retardation_s",
+             c_scale * ts),
+            (young_modulus_pa, "area_m2", "axial_damping", "axial_retardation_s",
+             sc.force_n * ts / sc.length_m)):
         speed = math.sqrt(modulus / rho)
-        z, delay, steps, frac, dash = [], [], [], [], []
+        z, delay, steps, frac, dash, rel, tau, eta, nu = [], [], [], [], [], [], [], [], []
         for sec in sections:
-            k = stations if getattr(sec, damp) > 0.0 else 0
-            # segment ends: 0, (j - 1/2)/k (the dashpots, at the centres of k equal parts), 1
+            per_length = getattr(sec, damp)
+            e = getattr(sec, retard) / ts
+            k = 0 if continuous or (per_length == 0.0 and e == 0.0) else stations
+            # segment ends: 0, (j - 1/2)/k (the stations, at the centres of k equal parts), 1
             ends = [0.0, *((j + 0.5) / k for j in range(k)), 1.0]
             for j in range(k + 1):
                 d = (ends[j + 1] - ends[j]) * sec.length_m / speed / ts
-                whole = max(1, math.floor(d / h))
+                lag = 0.0 if continuous else math.sqrt(PASSAGE_SHARE * e * d)
+                if lag > 0.0 and d - lag < h:
+                    raise ParameterError(
+                        f"{retard} = {getattr(sec, retard)!r} s is too large for a section of "
+                        f"{sec.length_m!r} m at this step: the material's low-pass "
+                        f"({lag * ts:.3g} s) must be shorter than the travel time of each part "
+                        f"of it ({d * ts:.3g} s) by a step")
+                whole = max(1, math.floor((d - lag) / h))
                 z.append(getattr(sec, prop) * math.sqrt(modulus * rho) / imp_scale)
                 delay.append(d)
                 steps.append(whole)
-                frac.append(min(max(d / h - whole, 0.0), 1.0 - 1e-12))
-                dash.append(getattr(sec, damp) * sec.length_m / k / imp_scale if j < k else 0.0)
+                frac.append(min(max((d - lag) / h - whole, 0.0), 1.0 - 1e-12))
+                dash.append(per_length * sec.length_m / k / imp_scale if j < k else 0.0)
+                # Kelvin-Voigt: eta times the part's stiffness z/D across each whole part
+                # between two stations (k/(k - 1) of it: the end halves carry none), less what
+                # the low-pass gives at low frequency
+                whole_part = 0 < j < k and k > 1
+                rel.append((1.0 - 0.5 * PASSAGE_SHARE) * e * z[-1] / d * k / (k - 1)
+                           if whole_part else 0.0)
+                tau.append(lag)
+                eta.append(e if continuous else 0.0)
+                nu.append(per_length / (rho * getattr(sec, prop)) * ts if continuous else 0.0)
         lines.append(WaveLine(np.array(z), np.array(delay), np.array(steps, dtype=np.int64),
-                              np.array(dash), h, np.array(frac)))
+                              np.array(dash), h, np.array(frac), np.array(rel), np.array(tau),
+                              np.array(eta), np.array(nu)))
     return StringWaves(lines[0], lines[1], h)
 
 
 def geometry_waves(params: RigParameters, geometry: StringGeometry, h: float,
                    young_modulus_pa: float = 200e9, torsional_damping: float | None = None,
-                   axial_damping: float | None = None) -> StringWaves:
-    """The wave lines of a preset's pipe (one section) at step ``h`` [t*]; damping per unit
-    length (torsional [N m s/rad per m], axial [N s/m per m]) None: the geometry's."""
+                   axial_damping: float | None = None, continuous: bool = False) -> StringWaves:
+    """The wave lines of a preset's pipe (one section) at step ``h`` [t*]; viscous damping per
+    unit length (torsional [N m s/rad per m], axial [N s/m per m]) None: the geometry's.
+    ``continuous``: the theory's exact pipe (``string_waves``)."""
     if torsional_damping is None:
         torsional_damping = geometry.torsional_damping_nm_s_per_rad_m
     if axial_damping is None:
@@ -183,4 +269,4 @@ def geometry_waves(params: RigParameters, geometry: StringGeometry, h: float,
     return string_waves(params, pipe_sections(geometry, torsional_damping, axial_damping), h,
                         shear_modulus_pa=geometry.shear_modulus_pa,
                         young_modulus_pa=young_modulus_pa,
-                        steel_density_kg_m3=geometry.steel_density_kg_m3)
+                        steel_density_kg_m3=geometry.steel_density_kg_m3, continuous=continuous)

@@ -4,14 +4,19 @@ Each step h: (1) read the Riemann invariants arriving at every junction this ste
 of travel time (N + f) h keeps the last N + 1 departures (slot ``steps mod (N + 1)``), and what
 arrives is the mean over the step of what left its other end (N + f) h earlier, the departures
 of N and N + 1 steps ago weighted 1 - f and f (exact for step means; the weighting dissipates
-h f (1 - f) (x_N - x_N+1)^2 / (4 z), booked as the transport loss); (2) step the BHA
+h f (1 - f) (x_N - x_N+1)^2 / (4 z), booked as the transport loss), then, in a segment of
+damped material, through a first-order low-pass (time constant tau, the buffer's travel time
+shortened by tau: a passage attenuated by 1/sqrt(1 + w^2 tau^2), delayed by D to second order
+in w; passive, its dissipation booked with the dashpots'); (2) step the BHA
 and the bit exactly as the lumped kernel does (the same inline laws ``_bit_rock_law``,
 ``_surface_at``, ``_first_swept_node``, ``_blade_height``, ``_accumulate``, switches located
 and the step split there), with the string torque C (phi_td - phi) replaced by the pipe's
 bottom torque a - (z + c) omega and W0 by its bottom force a_a - (z_a + c_a) v (omega, v
 predicted at each part's midpoint from the last step's acceleration); (3) send the reflected
-invariants b = a - 2 z omega_mean up from the BHA, solve each junction (impedance change and
-dashpot) and the top boundary, and write the departing invariants into the slots just read.
+invariants b = a - 2 z omega_mean up from the BHA, solve the junctions (impedance change,
+dashpot, and the relative dashpots across the parts between them that carry the material's
+Kelvin-Voigt damping: one tridiagonal system) and the top boundary, and write the departing
+invariants into the slots just read.
 
 The top boundary: in kinematic mode the speed omega0 is imposed (departing a = b + 2 z omega0).
 With a top drive in the loop (speed or torque mode) the top of the string is the drive's
@@ -59,10 +64,15 @@ NOD = kn.NO + 4
 
 
 @njit(cache=True, inline="always")
-def _arrivals(buf, off, n_seg, frac, z, slot_of, k, a_in, b_in):
+def _arrivals(buf, off, n_seg, frac, z, slot_of, k, a_in, b_in, tau, state, h):
     """Invariants arriving this step: a at each segment's bottom, b at its top (``n_seg``: the
-    slots per direction, N + 1); returns the transport loss's rate (times h: its energy)."""
+    slots per direction, N + 1), each through the segment's material low-pass if it has one
+    (time constant tau, trapezoidal: y+ = y + (h/tau)(x - (y + y+)/2), the step mean
+    (y + y+)/2 arrives, ``state`` holds y); returns the transport loss's rate and the
+    low-passes' dissipation rate (times h: their energies; a low-pass stores tau y^2/(4 z)
+    and dissipates (x - mean)^2/(4 z), exactly, step by step)."""
     loss = 0.0
+    damped = 0.0
     for j in range(n_seg.size):
         m, f = n_seg[j], frac[j]
         old = k % m
@@ -70,23 +80,50 @@ def _arrivals(buf, off, n_seg, frac, z, slot_of, k, a_in, b_in):
         slot_of[j] = old
         a0, a1 = buf[off[j] + old], buf[off[j] + new]
         b0, b1 = buf[off[j] + m + old], buf[off[j] + m + new]
-        a_in[j] = a1 + f * (a0 - a1)
-        b_in[j] = b1 + f * (b0 - b1)
+        a_x = a1 + f * (a0 - a1)
+        b_x = b1 + f * (b0 - b1)
         loss += f * (1.0 - f) * ((a1 - a0) ** 2 + (b1 - b0) ** 2) / (4.0 * z[j])
-    return loss
+        if tau[j] > 0.0:
+            r = 0.5 * h / tau[j]
+            ya, yb = state[0, j], state[1, j]
+            ya_new = (ya * (1.0 - r) + 2.0 * r * a_x) / (1.0 + r)
+            yb_new = (yb * (1.0 - r) + 2.0 * r * b_x) / (1.0 + r)
+            state[0, j], state[1, j] = ya_new, yb_new
+            a_m, b_m = 0.5 * (ya + ya_new), 0.5 * (yb + yb_new)
+            damped += ((a_x - a_m) ** 2 + (b_x - b_m) ** 2) / (4.0 * z[j])
+            a_x, b_x = a_m, b_m
+        a_in[j] = a_x
+        b_in[j] = b_x
+    return loss, damped
 
 
 @njit(cache=True, inline="always")
-def _junctions(buf, off, n_seg, z, c, slot_of, a_in, b_in, top_speed, bottom_speed):
+def _junctions(buf, off, n_seg, z, c, rel, slot_of, a_in, b_in, top_speed, bottom_speed,
+               upper, speed):
     """Departures of this step into the slots just read; returns the dashpot power of the
-    interior junctions. The top's speed is imposed (a top torque boundary would give it
-    from the drive's inertia); the bottom moves with the BHA."""
+    interior junctions and of the relative dashpots across the parts between them. The top's
+    speed is imposed (a top torque boundary would give it from the drive's inertia); the
+    bottom moves with the BHA. A junction j's speed w_j balances the torques
+    a_j-1 - z_j-1 w_j (from above) and b_j + z_j w_j (from below), its dashpot c_j-1 w_j and
+    the relative dashpots rel (w_j-1 - w_j), rel (w_j - w_j+1) of the parts on either side:
+    a tridiagonal system (the end parts carry none), solved by elimination (``upper``,
+    ``speed``: scratch of the segments' size)."""
     m = n_seg.size
     buf[off[0] + slot_of[0]] = b_in[0] + 2.0 * z[0] * top_speed
+    upper[0] = 0.0
+    speed[0] = 0.0
+    for j in range(1, m):
+        denom = z[j - 1] + z[j] + c[j - 1] + rel[j - 1] + rel[j] - rel[j - 1] * upper[j - 1]
+        upper[j] = rel[j] / denom
+        speed[j] = (a_in[j - 1] - b_in[j] + rel[j - 1] * speed[j - 1]) / denom
+    for j in range(m - 2, 0, -1):
+        speed[j] += upper[j] * speed[j + 1]
     power = 0.0
     for j in range(1, m):
-        om = (a_in[j - 1] - b_in[j]) / (z[j - 1] + z[j] + c[j - 1])
+        om = speed[j]
         power += c[j - 1] * om * om
+        if j < m - 1:
+            power += rel[j] * (om - speed[j + 1]) ** 2
         buf[off[j - 1] + n_seg[j - 1] + slot_of[j - 1]] = a_in[j - 1] - 2.0 * z[j - 1] * om
         buf[off[j] + slot_of[j]] = b_in[j] + 2.0 * z[j] * om
     buf[off[m - 1] + n_seg[m - 1] + slot_of[m - 1]] = a_in[m - 1] - 2.0 * z[m - 1] * bottom_speed
@@ -94,8 +131,8 @@ def _junctions(buf, off, n_seg, z, c, slot_of, a_in, b_in, top_speed, bottom_spe
 
 
 @njit(cache=True)
-def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, toff, tbuf, az, an, af, ac, aoff, abuf,
-            scratch, slots, n_steps, out, out_every, out_row):
+def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, ttau, tstate, az, an, af, ac,
+            ar, aoff, abuf, atau, astate, scratch, slots, n_steps, out, out_every, out_row):
     """Advance ``n_steps`` steps; rows every ``out_every`` steps (the lumped kernel's columns,
     then O_T_BOTTOM.. if ``out`` has them); return the next free row. A step that would turn
     the bit more than a sector is refused (K_REFUSED = 1), as in the lumped kernel."""
@@ -135,8 +172,10 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, toff, tbuf, az, an, af, ac, a
     if not drive:
         om_td = om0
     for _ in range(n_steps):
-        lr = _arrivals(tbuf, toff, tn, tf, tz, tslot, steps, ta_in, tb_in)
-        la = _arrivals(abuf, aoff, an, af, az, aslot, steps, aa_in, ab_in)
+        lr, dr = _arrivals(tbuf, toff, tn, tf, tz, tslot, steps, ta_in, tb_in, ttau, tstate, h)
+        la, da = _arrivals(abuf, aoff, an, af, az, aslot, steps, aa_in, ab_in, atau, astate, h)
+        damp_r += h * dr
+        damp_a += h * da
         a_t, a_a = ta_in[mt - 1], aa_in[ma - 1]
         rate = (a_t - a_prev) / h          # the bottom torque's rate while the bit is held
         # the top: speed imposed or the drive's inertia under its motor torque; hook force w0
@@ -204,9 +243,10 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, toff, tbuf, az, an, af, ac, a
             k[kn.K_REFUSED] = 1
             break
         # the string: reflections at the BHA, junctions, the top
-        damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tslot, ta_in, tb_in, om_top,
-                                 om_int / h)
-        damp_a += h * _junctions(abuf, aoff, an, az, ac, aslot, aa_in, ab_in, v_top, v_int / h)
+        damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top,
+                                 om_int / h, scratch[4], scratch[5])
+        damp_a += h * _junctions(abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top,
+                                 v_int / h, scratch[4], scratch[5])
         work_td += h * ts_top * om_top
         loss_r += h * lr
         loss_a += h * la

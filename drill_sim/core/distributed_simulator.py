@@ -24,13 +24,17 @@ from .top_drive import DriveGroups
 
 class _Line:
     """The arrays of one wave line: impedances, ring buffers (N + 1 slots per direction for a
-    travel time of (N + f) steps), their offsets, the fractions f, dashpots."""
+    travel time of (N + f) steps), their offsets, the fractions f, dashpots, relative dashpots
+    across the segments, the material low-passes' time constants and states (row 0: a, 1: b)."""
 
     def __init__(self, line: WaveLine) -> None:
         self.z = np.ascontiguousarray(line.z, dtype=np.float64)
         self.n = np.ascontiguousarray(line.steps + 1, dtype=np.int64)
         self.f = np.ascontiguousarray(line.frac, dtype=np.float64)
         self.c = np.ascontiguousarray(line.dashpot, dtype=np.float64)
+        self.rel = np.ascontiguousarray(line.relative, dtype=np.float64)
+        self.tau = np.ascontiguousarray(line.tau, dtype=np.float64)
+        self.state = np.zeros((2, self.z.size))
         self.off = np.concatenate([[0], np.cumsum(2 * self.n)[:-1]]).astype(np.int64)
         self.buf = np.zeros(int(2 * self.n.sum()))
 
@@ -42,13 +46,15 @@ class _Line:
             o, m = self.off[j], self.n[j]
             self.buf[o:o + m] = below + self.z[j] * speed
             self.buf[o + m:o + 2 * m] = below - self.z[j] * speed
+            self.state[:, j] = below + self.z[j] * speed, below - self.z[j] * speed
             if j > 0:
                 below += self.c[j - 1] * speed
         return below
 
     def energy(self, h: float, steps: int) -> float:
         """Energy in transit after ``steps`` steps: h (a^2 + b^2)/(4 z) of every departure still
-        on its way, the oldest (slot ``steps`` mod (N + 1)) for the fraction f of it."""
+        on its way, the oldest (slot ``steps`` mod (N + 1)) for the fraction f of it, plus what
+        the material's low-passes hold, tau y^2/(4 z)."""
         total = 0.0
         for j in range(self.n.size):
             o, m = self.off[j], self.n[j]
@@ -56,7 +62,8 @@ class _Line:
             e = float(np.sum(self.buf[o:o + 2 * m] ** 2))
             e -= (1.0 - self.f[j]) * (self.buf[o + oldest] ** 2 + self.buf[o + m + oldest] ** 2)
             total += e / (4.0 * self.z[j])
-        return h * total
+        held = float(np.sum(self.tau * (self.state[0] ** 2 + self.state[1] ** 2) / (4.0 * self.z)))
+        return h * total + held
 
 
 class StringSimulator(Simulator):
@@ -70,7 +77,7 @@ class StringSimulator(Simulator):
         self.waves = waves
         self._t, self._a = _Line(waves.torsion), _Line(waves.axial)
         m = max(self._t.n.size, self._a.n.size)
-        self._scratch = np.zeros((4, m))
+        self._scratch = np.zeros((6, m))
         self._slots = np.zeros((2, m), dtype=np.int64)
         super().__init__(groups, waves.h, stick_window=stick_window,
                          hoist_speed_limit=hoist_speed_limit, nodes=nodes, drive=drive)
@@ -84,11 +91,15 @@ class StringSimulator(Simulator):
     # ---- starts --------------------------------------------------------------------------
     def start_steady(self, w0: float, omega0: float, perturbation: float = 0.0) -> None:
         """Steady drilling everywhere: the string turns at omega0 carrying the steady torque
-        (plus the dashpots' share above each), moves at v0 carrying w0; BHA speed perturbed.
-        A top drive in the loop turns at omega0 under the torque at the top of the string (its
-        motor torque, PI integral term and torque command)."""
+        (plus the dashpots' share above each), moves at v0 with the hook holding w0; the
+        axial dashpots take c v0 of it, so the bit drills steadily under w0 - sum(c) v0
+        (``steady_state``); BHA speed perturbed. A top drive in the loop turns at omega0
+        under the torque at the top of the string (its motor torque, PI integral term and
+        torque command)."""
         self._extend()
-        super().start_steady(w0, omega0, perturbation)
+        w_bit = self._bit_weight(w0, omega0)
+        super().start_steady(w_bit, omega0, perturbation)
+        self.set_commands(w0, omega0)          # the hook holds the available weight
         st = self.steady_state
         x = self._x
         x[kn.X_TS] = self._t.fill_steady(st.t0, omega0)
@@ -97,11 +108,25 @@ class StringSimulator(Simulator):
             raise ParameterError(f"steady drilling needs a motor torque of {x[kn.X_TS]:.4g} C, "
                                  f"outside the drive's limits [{d.t_min:.4g}, {d.t_max:.4g}] C")
         x[kn.X_TM] = x[kn.X_TREF] = x[kn.X_DRIVE_I] = self._c[kn.C_T_CMD] = x[kn.X_TS]
-        x[dk.X_F_TOP] = self._a.fill_steady(w0, st.v0)
+        x[dk.X_F_TOP] = self._a.fill_steady(w_bit, st.v0)
         x[kn.X_PHI_TD] = self._twist(st.t0, omega0)
-        x[dk.X_T_BOTTOM], x[dk.X_F_BOTTOM], x[dk.X_V_TOP] = st.t0, w0, st.v0
+        x[dk.X_T_BOTTOM], x[dk.X_F_BOTTOM], x[dk.X_V_TOP] = st.t0, w_bit, st.v0
         x[dk.X_DOM] = x[dk.X_DV] = 0.0
         x[dk.X_A_PREV] = self._t.buf[self._t.off[-1]]
+
+    def _bit_weight(self, w0: float, omega0: float) -> float:
+        """The weight on bit of steady drilling under the hook's w0: w = w0 - sum(c_a) v0(w),
+        by fixed-point iteration (the drag's share is small: sum(c_a) dv0/dw << 1)."""
+        from .stability import steady_state
+        drag, w = float(np.sum(self._a.c)), w0
+        for _ in range(100):
+            if drag == 0.0:
+                break
+            w_new = w0 - drag * steady_state(self.groups, w, omega0).v0
+            if abs(w_new - w) <= 1e-15 * abs(w0):
+                break
+            w = w_new
+        return w
 
     def _twist(self, t0: float, omega0: float) -> float:
         """Twist of the steady string, top angle minus bit angle: sum of T_j D_j / z_j."""
@@ -114,17 +139,20 @@ class StringSimulator(Simulator):
 
     @property
     def steady_state(self):
+        """Steady drilling under the commands: at the bit, the hook's w0 less the axial
+        dashpots' drag (``start_steady``)."""
         from .stability import steady_state
         w0, om0 = self.commands
-        return steady_state(self.groups, w0, om0)
+        return steady_state(self.groups, self._bit_weight(w0, om0), om0)
 
     def start_at_rest(self, gap: float = 0.0) -> None:
         """Bit at rest ``gap`` [L*] above a flat bottom, string relaxed and hanging in static
         equilibrium (the hook carries the weight), commands zero."""
         self._extend()
         super().start_at_rest(gap)
-        self._t.buf[:] = 0.0
-        self._a.buf[:] = 0.0
+        for line in (self._t, self._a):
+            line.buf[:] = 0.0
+            line.state[:] = 0.0
         self._x[kn.NX:] = 0.0
 
     def load_state(self, **_: object) -> None:
@@ -135,8 +163,9 @@ class StringSimulator(Simulator):
     def advance_into(self, n_steps: int, out: np.ndarray, every: int, row: int) -> int:
         t, a = self._t, self._a
         row = int(dk.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
-                             t.z, t.n, t.f, t.c, t.off, t.buf, a.z, a.n, a.f, a.c, a.off, a.buf,
-                             self._scratch, self._slots, n_steps, out, every, row))
+                             t.z, t.n, t.f, t.c, t.rel, t.off, t.buf, t.tau, t.state, a.z, a.n,
+                             a.f, a.c, a.rel, a.off, a.buf, a.tau, a.state, self._scratch,
+                             self._slots, n_steps, out, every, row))
         if self._k[kn.K_REFUSED]:
             self._refuse_step()
         return row
@@ -169,7 +198,8 @@ class StringSimulator(Simulator):
                 self._a.energy(self.dt, self.steps) + 0.5 * x[kn.X_V] ** 2 / self.groups.psi)
 
     def damped(self) -> tuple[float, float]:
-        """Energy the dashpots dissipated over the window (torsional [C], axial [F* L*])."""
+        """Energy the pipe's damping (dashpots, viscous and material) dissipated over the
+        window (torsional [C], axial [F* L*])."""
         return float(self._acc[dk.A_DAMPED_ROT]), float(self._acc[dk.A_DAMPED_AX])
 
     def transport_loss(self) -> tuple[float, float]:

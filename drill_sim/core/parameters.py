@@ -186,7 +186,10 @@ class StringGeometry:
     M = rho A_collar L_collar), and the submerged weight is the buoyed weight of pipe and
     collars together. The distributed string (``string_model: distributed``) also takes the
     pipe's viscous damping per unit length, torsional [N m s/rad per m of pipe] and axial
-    [N s/m per m of pipe]; 0 (the default) is a lossless pipe; the lumped model ignores them.
+    [N s/m per m of pipe] (the mud), and its material (Kelvin-Voigt) retardation times,
+    torsional and axial [s] (stress G (strain + eta strain rate), likewise E): the first damps
+    the low modes, the second the high ones. 0 (the defaults here; the shipped presets set
+    them) is a lossless pipe; the lumped model ignores them.
     """
 
     pipe_length_m: float
@@ -200,6 +203,8 @@ class StringGeometry:
     mud_density_kg_m3: float = 1200.0
     torsional_damping_nm_s_per_rad_m: float = 0.0
     axial_damping_n_s_per_m2: float = 0.0
+    torsional_retardation_time_s: float = 0.0
+    axial_retardation_time_s: float = 0.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -207,7 +212,9 @@ class StringGeometry:
                 f.name, getattr(self, f.name),
                 low_inclusive=f.name in ("pipe_id_m", "collar_id_m", "mud_density_kg_m3",
                                          "torsional_damping_nm_s_per_rad_m",
-                                         "axial_damping_n_s_per_m2")))
+                                         "axial_damping_n_s_per_m2",
+                                         "torsional_retardation_time_s",
+                                         "axial_retardation_time_s")))
         for part in ("pipe", "collar"):
             od, inner = getattr(self, f"{part}_od_m"), getattr(self, f"{part}_id_m")
             if inner >= od:

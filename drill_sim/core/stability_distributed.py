@@ -26,12 +26,14 @@ import numpy as np
 from .distributed import StringWaves, WaveLine
 from .parameters import Groups, ParameterError
 from .stability import SteadyState, steady_state, winding_number
+from .top_drive import DriveGroups
 
 
 def simulated(line: WaveLine) -> WaveLine:
-    """The line with the delays the simulation uses ((steps + frac) h: the geometry's, but
-    for segments shorter than a step), for comparisons at 1e-3."""
-    return WaveLine(line.z, line.simulated_delay, line.steps, line.dashpot, line.h, line.frac)
+    """The line with the delays the simulation uses ((steps + frac) h + tau: the geometry's,
+    but for segments shorter than a step), for comparisons at 1e-3."""
+    return WaveLine(line.z, line.simulated_delay, line.steps, line.dashpot, line.h, line.frac,
+                    relative=line.relative, tau=line.tau, eta=line.eta, nu=line.nu)
 
 
 def characteristic(s: np.ndarray | complex, groups: Groups, steady: SteadyState,
@@ -124,10 +126,7 @@ def natural_frequencies(waves: StringWaves, psi: float, count: int = 3,
     s^2 m12 - m22; with the top drive's inertia j = ``top_inertia`` [I] at the top under a held
     motor torque (T_top = -j s^2 phi_top, the BHA s^2 phi_bit = T_bit):
     s^2 (m11 - j s^2 m12) - (m21 - j s^2 m22), whose j -> inf limit is the former."""
-    def lossless(line: WaveLine) -> WaveLine:
-        return WaveLine(line.z, line.delay, line.steps, 0.0 * line.dashpot, line.h, line.frac)
-
-    tor, ax = lossless(waves.torsion), lossless(waves.axial)
+    tor, ax = waves.torsion.lossless(), waves.axial.lossless()
 
     def f_t(om):
         m11, m12, m21, m22 = tor.transfer(1j * om)
@@ -159,3 +158,83 @@ def _real_roots(f, count: int, omega_max: float) -> np.ndarray:
             lo, hi, f_lo = (mid, hi, f_mid) if np.sign(f_mid) == np.sign(f_lo) else (lo, mid, f_lo)
         roots.append(0.5 * (lo + hi))
     return np.array(roots)
+
+
+@dataclass(frozen=True)
+class StringMode:
+    """A damped mode of the string off bottom: its root s [1/t*] (Im s > 0)."""
+
+    kind: str                    # "torsional" or "axial"
+    root: complex
+
+    @property
+    def frequency(self) -> float:
+        """The damped angular frequency Im s [1/t*]."""
+        return float(self.root.imag)
+
+    @property
+    def damping_ratio(self) -> float:
+        """-Re s / |s| (negative: a growing mode)."""
+        return float(-self.root.real / abs(self.root))
+
+
+@dataclass(frozen=True)
+class StringModes:
+    """The first ``count`` modes of each family, lowest first; ``complete``: in each family's
+    box the Newton search found every root the argument principle counts."""
+
+    torsional: tuple[StringMode, ...]
+    axial: tuple[StringMode, ...]
+    complete: bool
+
+
+def top_stiffness(drive: DriveGroups, s: np.ndarray) -> np.ndarray | None:
+    """The drive's dynamic stiffness at the top of the string, T = -K(s) phi_top [C], times
+    (1 + lag s) so that it is a polynomial: torque mode (a held motor torque) j s^2 (1 + lag s);
+    speed mode j s^2 (1 + lag s) + kp s + ki (the PI's torque through the lag); None in
+    kinematic mode (the top's angle held: K infinite)."""
+    if drive.mode == "kinematic":
+        return None
+    k = drive.j * s * s * (1.0 + drive.lag * s)
+    if drive.mode == "speed":
+        k = k + drive.kp * s + drive.ki
+    return k
+
+
+def string_modes(waves: StringWaves, psi: float, drive: DriveGroups, count: int = 5
+                 ) -> StringModes:
+    """The string's damped modes off bottom (bit free, hook force held) with ``drive`` at the
+    top: roots in Im s > 0 of the torsional s^2 (L m11 - K m12) - (L m21 - K m22) (K, L =
+    1 + lag s: ``top_stiffness``; kinematic: s^2 m12 - m22) and of the axial s^2 m11 - psi m21,
+    from ``waves``' transfer matrices (build them ``continuous`` for the exact damped pipe).
+    The box for each family reaches (count + 1) pi over the travel time along the pipe, above
+    the count-th mode for any top between held and free, and left to -that (damping ratios
+    up to ~0.7) or to half way to the material's branch point -1/eta."""
+    def f_t(s):
+        m11, m12, m21, m22 = waves.torsion.transfer(s)
+        k = top_stiffness(drive, s)
+        if k is None:
+            return s * s * m12 - m22
+        lag = 1.0 + drive.lag * s
+        return s * s * (lag * m11 - k * m12) - (lag * m21 - k * m22)
+
+    def f_a(s):
+        m11, _, m21, _ = waves.axial.transfer(s)
+        return s * s * m11 - psi * m21
+
+    found, complete = [], True
+    for kind, line, f in (("torsional", waves.torsion, f_t), ("axial", waves.axial, f_a)):
+        im_max = (count + 1) * math.pi / float(np.sum(line.delay))
+        eta = float(np.max(line.eta))
+        re_min = -im_max if eta == 0.0 else max(-im_max, -0.5 / eta)
+        box = (re_min, 0.25 * im_max, 1e-3 * im_max, im_max)
+        n = winding_number(box, f, "the search box for the modes", max_points=2**18)
+        roots = np.empty(0, dtype=complex)
+        for density in (12, 40, 80):
+            roots = _newton_from_grid(box, f, density)
+            if roots.size >= n:
+                break
+        complete &= roots.size == n and n >= count
+        roots = roots[np.argsort(roots.imag)][:count]
+        found.append(tuple(StringMode(kind, complex(r)) for r in roots))
+    return StringModes(found[0], found[1], bool(complete))

@@ -30,6 +30,7 @@ T_TOP_DRIVE = "tests/core/test_top_drive.py"
 T_DIST = "tests/core/test_distributed.py"
 T_DIST_TD = "tests/core/test_distributed_top_drive.py"
 T_DAMP = "tests/core/test_distributed_damping.py"
+T_MODES = "tests/core/test_string_modes.py"
 T_LAWS = "tests/control/test_control_laws.py"
 T_SUP = "tests/control/test_control_supervisor.py"
 T_EVAL = "tests/control/test_control_evaluation.py"
@@ -60,10 +61,34 @@ BREAKS: tuple[Break, ...] = (
         "_section_change", f"{T_DIST_TD}::test_free_string_rings_at_the_roots_with_the_drive"
         "_inertia_on_top", f"{T_DIST_TD}::test_rig_in_torque_mode_spins_the_whole_string_up"),
     one("axial damping x3 in the SI conversion", CORE + "distributed.py",
-        "dash.append(getattr(sec, damp) * sec.length_m / k / imp_scale",
-        "dash.append((3.0 if damp == 'axial_damping' else 1.0) * getattr(sec, damp)"
+        "dash.append(per_length * sec.length_m / k / imp_scale",
+        "dash.append((3.0 if damp == 'axial_damping' else 1.0) * per_length"
         " * sec.length_m / k / imp_scale",
         f"{T_DAMP}::test_free_modes_decay_as_the_continuously_damped_pipe"),
+    # ---- the pipe's damping and the string's modes ----------------------------------------
+    one("Kelvin-Voigt's stiffness G (1 + eta s) taken as G (1 + eta s / 2)",
+        CORE + "distributed.py", "                q2 = 1.0 + eta * s\n",
+        "                q2 = 1.0 + 0.5 * eta * s\n",
+        f"{T_MODES}::test_modes_are_the_exact_roots_of_the_damped_pipe"),
+    one("the retardation time read in ms, not s", CORE + "distributed.py",
+        "            e = getattr(sec, retard) / ts\n",
+        "            e = 1e-3 * getattr(sec, retard) / ts\n",
+        f"{T_MODES}::test_modes_are_the_exact_roots_of_the_damped_pipe",
+        f"{T_MODES}::test_shipped_presets_damp_every_mode_up_to_the_fifth"),
+    one("the drive's PI left out of the modes' top boundary", CORE + "stability_distributed.py",
+        "        k = k + drive.kp * s + drive.ki\n", "        k = k + 0.0 * s\n",
+        f"{T_MODES}::test_modes_are_the_exact_roots_of_the_damped_pipe"),
+    one("no low-pass on the passages: the station-node modes ring on", CORE + "distributed.py",
+        "PASSAGE_SHARE = 0.2\n", "PASSAGE_SHARE = 0.0\n",
+        f"{T_MODES}::test_no_mode_of_the_simulated_string_is_left_undamped"),
+    one("the relative dashpots' dissipation not booked", CORE + "distributed_kernel.py",
+        "            power += rel[j] * (om - speed[j + 1]) ** 2\n",
+        "            power += 0.0 * rel[j] * (om - speed[j + 1]) ** 2\n",
+        f"{T_DIST}::test_energy_balance_in_stick_slip"),
+    one("the low-pass's state not kept from step to step", CORE + "distributed_kernel.py",
+        "            state[0, j], state[1, j] = ya_new, yb_new\n",
+        "            state[0, j], state[1, j] = ya, yb\n",
+        f"{T_MODES}::test_simulation_rings_at_its_modes_close_to_the_exact_pipe"),
     # ---- sensors ------------------------------------------------------------------------
     one("severity divided by the mid-range, not the mean", CORE + "sensors.py",
         "mean = win[W_SUM] / win[W_N] if win[W_N] > 0 else w",

@@ -22,13 +22,15 @@ YOUNG_MODULUS_PA = 200e9
 @dataclass(frozen=True)
 class Pipe:
     """One uniform pipe: per length m [kg/m or kg m], stiffness K [N or N m^2], damping c per
-    length, length [m], and the BHA's end inertia or mass."""
+    length, length [m], the BHA's end inertia or mass, and the material's Kelvin-Voigt
+    retardation time eta [s] (stress K (strain + eta strain rate))."""
 
     m: float
     k: float
     c: float
     length_m: float
     end: float
+    eta: float = 0.0
 
     @property
     def speed_m_s(self) -> float:
@@ -55,17 +57,17 @@ def pipe(kind: str, preset, geometry=None, young_modulus_pa: float = YOUNG_MODUL
     if kind == "torsion":
         j = polar_moment_m4(g.pipe_od_m, g.pipe_id_m)
         return Pipe(rho * j, g.shear_modulus_pa * j, g.torsional_damping_nm_s_per_rad_m,
-                    g.pipe_length_m, preset.rig.bha_inertia_kg_m2)
+                    g.pipe_length_m, preset.rig.bha_inertia_kg_m2, g.torsional_retardation_time_s)
     a = area_m2(g.pipe_od_m, g.pipe_id_m)
     return Pipe(rho * a, young_modulus_pa * a, g.axial_damping_n_s_per_m2, g.pipe_length_m,
-                preset.rig.bha_mass_kg)
+                preset.rig.bha_mass_kg, g.axial_retardation_time_s)
 
 
-def _lossless(kind: str, p: Pipe, w: float) -> float:
+def _lossless(kind: str, p: Pipe, w):
     theta = w * p.length_m / p.speed_m_s
     if kind == "torsion":
-        return -p.end * w * math.sin(theta) + p.k / p.speed_m_s * math.cos(theta)
-    return p.end * w * math.cos(theta) + p.k / p.speed_m_s * math.sin(theta)
+        return -p.end * w * np.sin(theta) + p.k / p.speed_m_s * np.cos(theta)
+    return p.end * w * np.cos(theta) + p.k / p.speed_m_s * np.sin(theta)
 
 
 def natural_frequencies_rad_s(kind: str, p: Pipe, count: int) -> list[float]:
@@ -73,7 +75,7 @@ def natural_frequencies_rad_s(kind: str, p: Pipe, count: int) -> list[float]:
     the real frequency equation on s = i w, refined by bisection."""
     top = (count + 1) * math.pi * p.speed_m_s / p.length_m
     ws = np.linspace(1e-6, top, 400_001)
-    values = np.array([_lossless(kind, p, w) for w in ws])
+    values = _lossless(kind, p, ws)
     out = []
     for i in np.nonzero(np.sign(values[1:]) != np.sign(values[:-1]))[0][:count]:
         low, high, sign = ws[i], ws[i + 1], np.sign(values[i])
@@ -119,3 +121,49 @@ def natural_frequencies_with_top_inertia_rad_s(p: Pipe, top_inertia: float, coun
             low, high = (mid, high) if np.sign(g(mid)) == sign else (low, mid)
         out.append(0.5 * (low + high))
     return out
+
+
+def lossless_string(preset):
+    """The preset's pipe without its damping (viscous and material), for the tests whose
+    theory is the lossless (or only viscously damped) pipe."""
+    from dataclasses import replace
+    return replace(preset.string, torsional_damping_nm_s_per_rad_m=0.0,
+                   axial_damping_n_s_per_m2=0.0, torsional_retardation_time_s=0.0,
+                   axial_retardation_time_s=0.0)
+
+
+def damped_roots(kind: str, p: Pipe, count: int, top=None) -> list[complex]:
+    """The first ``count`` roots s [1/s] (Im s > 0) of the pipe with both its dampings, the bit
+    off bottom. m s^2 x + c s x = K (1 + eta s) x'': k^2 = s (m s + c) / (K (1 + eta s)), and
+    the section's force is K' x' with K' = K (1 + eta s). Axial, the hook force held:
+    M s^2 cosh kL + K' k sinh kL = 0. Torsion with the top's dynamic stiffness ``top(s)``
+    (torque on the pipe's top -top(s) phi(0); None: the top held), the BHA's I at the
+    bottom: I s^2 (K' k cosh kL + top sinh kL) + K' k (K' k sinh kL + top cosh kL) = 0
+    (top phi(0) = K' phi'(0), B = top A/(K' k) in phi = A cosh kx + B sinh kx),
+    whose limit top -> inf is the held top's I s^2 sinh kL + K' k cosh kL = 0. Newton from the
+    lossless pipe's roots with the top held, each one checked to be a
+    root of its own (no two alike); the starts also halfway between them, where a free top's
+    roots lie."""
+    def f(s):
+        kp = p.k * (1.0 + p.eta * s)
+        k = np.sqrt(s * (p.m * s + p.c) / kp)
+        ch, sh = np.cosh(k * p.length_m), np.sinh(k * p.length_m)
+        if kind == "axial":
+            return p.end * s * s * ch + kp * k * sh
+        if top is None:
+            return p.end * s * s * sh + kp * k * ch
+        t = top(s)
+        return p.end * s * s * (kp * k * ch + t * sh) + kp * k * (kp * k * sh + t * ch)
+    held = natural_frequencies_rad_s(kind, p, count + 1)
+    starts = sorted(held + [0.5 * (a + b) for a, b in zip([0.0, *held], held, strict=False)])
+    roots: list[complex] = []
+    for w in starts:
+        s = complex(-1e-3 * w, w)
+        for _ in range(100):
+            d = 1e-7 * abs(s)
+            s = s - f(s) / ((f(s + d) - f(s - d)) / (2 * d))
+        if (np.isfinite(s) and s.imag > 1e-3 * held[0]
+                and abs(f(s)) < 1e-9 * abs(f(complex(0.0, abs(s))))
+                and all(abs(s - r) > 1e-6 * abs(s) for r in roots)):
+            roots.append(complex(s))
+    return sorted(roots, key=lambda r: r.imag)[:count]

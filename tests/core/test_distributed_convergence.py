@@ -12,6 +12,7 @@ slope 2.01 (with travel times rounded to whole steps it was first order, slope 0
 from __future__ import annotations
 
 import numpy as np
+from pipe_theory import lossless_string
 
 from drill_sim.core import load_preset
 from drill_sim.core.distributed import geometry_waves
@@ -25,7 +26,7 @@ PAIRWISE_BOUND = 1.5
 
 def _end_state(h: float, duration: float = 6.0) -> np.ndarray:
     p = load_preset("base")
-    sim = StringSimulator(p.rig.groups, geometry_waves(p.rig, p.string, h))
+    sim = StringSimulator(p.rig.groups, geometry_waves(p.rig, lossless_string(p), h))
     sim.start_steady(9.6, 1.32, 1e-2)
     sim.advance(round(duration / h))
     s = sim.state()

@@ -10,7 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from pipe_theory import first_root, pipe
+from pipe_theory import first_root, lossless_string, pipe
 
 from drill_sim.core import ParameterError, Rig, load_preset
 from drill_sim.core import distributed_kernel as dk
@@ -45,7 +45,7 @@ def test_free_modes_decay_as_the_continuously_damped_pipe(name, torsional, axial
     SI conversion of the damping or the density is caught, which a reference built from the
     code's own wave lines let through)."""
     p = load_preset(name)
-    geometry = replace(p.string, torsional_damping_nm_s_per_rad_m=torsional,
+    geometry = replace(lossless_string(p), torsional_damping_nm_s_per_rad_m=torsional,
                        axial_damping_n_s_per_m2=axial)
     waves = geometry_waves(p.rig, geometry, H)
     # the reference in SI from the geometry, in t* units (the one scale taken from the code)
@@ -71,7 +71,7 @@ def test_steady_turn_costs_the_damping_torque():
     leaves a small ringing of the modes whose nodes sit on the dashpots, see model.md)."""
     p = load_preset("base")
     c = 0.05                                        # N m s/rad per m of pipe
-    geometry = replace(p.string, torsional_damping_nm_s_per_rad_m=c)
+    geometry = replace(lossless_string(p), torsional_damping_nm_s_per_rad_m=c)
     rig = Rig(p.rig, string_model="distributed", geometry=geometry)
     rig.start_at_rest(gap_m=10.0)
     rig.command(6.0, p.rig.submerged_weight_n)
@@ -82,16 +82,31 @@ def test_steady_turn_costs_the_damping_torque():
     assert rig.metrics()["mean_surface_torque_nm"] == pytest.approx(expected, rel=1e-3)
 
 
-def test_preset_keys_default_to_a_lossless_pipe_and_are_checked():
+def test_preset_keys_are_read_in_si_default_to_a_lossless_pipe_and_are_checked():
     name, data = read_yaml("preset", "presets", "base")
-    assert load_preset("base").string.torsional_damping_nm_s_per_rad_m == 0.0
-    string = dict(data["string"], torsional_damping_nm_s_per_rad_m=0.1,
-                  axial_damping_n_s_per_m2=3.0)
+    keys = ("torsional_damping_nm_s_per_rad_m", "axial_damping_n_s_per_m2",
+            "torsional_retardation_time_s", "axial_retardation_time_s")
+    bare = {k: v for k, v in data["string"].items() if k not in keys}
+    assert all(getattr(preset_from_dict(name, {**data, "string": bare}).string, k) == 0.0
+               for k in keys)
+    string = dict(bare, torsional_damping_nm_s_per_rad_m=0.1, axial_damping_n_s_per_m2=3.0,
+                  torsional_retardation_time_s=2e-3)
     preset = preset_from_dict(name, {**data, "string": string})
     waves = geometry_waves(preset.rig, preset.string, H)
-    scale = preset.rig.scales.stiffness_nm_per_rad * preset.rig.scales.time_s
+    ts = preset.rig.scales.time_s
+    scale = preset.rig.scales.stiffness_nm_per_rad * ts
     assert waves.torsion.dashpot.sum() == pytest.approx(0.1 * 1000.0 / scale, rel=1e-12)
-    for bad in (-1.0, math.nan, math.inf, "x"):
-        with pytest.raises(ParameterError, match="torsional_damping_nm_s_per_rad_m"):
-            preset_from_dict(name, {**data, "string": dict(string,
-                                                           torsional_damping_nm_s_per_rad_m=bad)})
+    # the material's dashpot across a whole part: eta [t*] times the part's stiffness z/D,
+    # 8/7 of it (the end halves carry none), less the low-pass's share at low frequency (0.1);
+    # the low-pass: tau^2 = 0.2 eta D; the axial line has no material damping
+    line = waves.torsion
+    eta = 2e-3 / ts
+    assert line.relative[1] == pytest.approx(0.9 * eta * line.z[1] / line.delay[1] * 8 / 7,
+                                             rel=1e-12)
+    assert line.relative[0] == line.relative[-1] == 0.0
+    assert line.tau == pytest.approx(np.sqrt(0.2 * eta * line.delay), rel=1e-12)
+    assert not waves.axial.relative.any() and not waves.axial.tau.any()
+    for key in keys:
+        for bad in (-1.0, math.nan, math.inf, "x"):
+            with pytest.raises(ParameterError, match=key):
+                preset_from_dict(name, {**data, "string": dict(string, **{key: bad})})

@@ -9,6 +9,7 @@ import math
 
 import pytest
 from pipe_theory import (
+    lossless_string,
     natural_frequencies_rad_s,
     natural_frequencies_with_top_inertia_rad_s,
     pipe,
@@ -37,7 +38,7 @@ def test_free_string_rings_at_the_roots_with_the_drive_inertia_on_top(inertia_kg
     computed in SI from the geometry (0.5 %), and the first is more than 1 % from the
     speed-held string's (so a top boundary that ignored the drive would fail)."""
     p = load_preset("base")
-    waves = geometry_waves(p.rig, p.string, H)
+    waves = geometry_waves(p.rig, lossless_string(p), H)
     drive = _drive(p, "torque", top_drive_inertia_kg_m2=inertia_kg_m2)
     # the reference in SI from the geometry and the drive's J (not the code's wave lines)
     ts, torsion = p.rig.scales.time_s, pipe("torsion", p)
@@ -64,7 +65,7 @@ def test_energy_balance_in_torque_mode_stick_slip(damping):
     issue asks 0.5 %); sending the end-of-step drive speed down instead of the step's mean
     gives 1.2e-5."""
     p = load_preset("base")
-    waves = geometry_waves(p.rig, p.string, H, torsional_damping=damping)
+    waves = geometry_waves(p.rig, lossless_string(p), H, torsional_damping=damping)
     sim = StringSimulator(p.rig.groups, waves, drive=_drive(p, "torque"))
     sim.start_steady(9.6, 1.32, 1e-3)
     sim.run(100.0)
@@ -82,17 +83,31 @@ def test_energy_balance_in_torque_mode_stick_slip(damping):
 
 @pytest.mark.parametrize("mode", ["speed", "torque"])
 def test_steady_start_is_an_equilibrium_with_the_drive(mode):
-    """The exact steady start with the drive in the loop stays put (the drive's torque is the
-    top torque, its speed omega0): bit and drive speeds at omega0 to 1e-9 after 20 t*."""
+    """The exact steady start with the drive in the loop stays put on the preset's damped pipe
+    (the drive's torque is the top torque: the bit's plus the viscous dashpots' c L omega0 in
+    SI, nothing from the material's dashpots and low-passes in a steady turn; its speed
+    omega0; the hook holds w0, of which the axial dashpots take c v0 along the pipe, so the bit
+    drills under less): bit and drive speeds at omega0 and the rate of penetration at the
+    bit's steady v0 to 1e-9 after 20 t* (with the bit under the whole w0, the string
+    accelerated axially and the bit left omega0 by 4 % in 20 t*)."""
     p = load_preset("base")
     waves = geometry_waves(p.rig, p.string, H)
     kw = {"drive_kp_nm_s_rad": 3e4} if mode == "speed" else {}
     sim = StringSimulator(p.rig.groups, waves, drive=_drive(p, mode, **kw))
     sim.start_steady(9.6, 1.32, 0.0)
+    g, sc = p.string, p.rig.scales
+    viscous = g.torsional_damping_nm_s_per_rad_m * g.pipe_length_m * 1.32 / sc.time_s
+    top = sim.steady_state.t0 + viscous / sc.stiffness_nm_per_rad
+    assert sim.state().motor_torque == pytest.approx(top, rel=1e-12)
+    assert waves.steady_top_torque(sim.steady_state.t0, 1.32) == pytest.approx(top, rel=1e-12)
     sim.advance(round(20.0 / H))
     s = sim.state()
     assert s.omega == pytest.approx(1.32, abs=1e-9)
     assert s.omega_td == pytest.approx(1.32, abs=1e-9)
+    drag = float(waves.axial.dashpot.sum())
+    bit = sim.steady_state
+    assert s.v == pytest.approx(bit.v0, rel=1e-9)
+    assert s.w == pytest.approx(9.6 - drag * bit.v0, rel=1e-9) and drag * bit.v0 > 1e-4
 
 
 def test_speed_mode_holds_the_set_point_in_stick_slip():
@@ -101,7 +116,7 @@ def test_speed_mode_holds_the_set_point_in_stick_slip():
     torque the start preloads into the integral: at the same weight P alone would pass); the
     mean bit speed follows it."""
     p = load_preset("base")
-    sim = StringSimulator(p.rig.groups, geometry_waves(p.rig, p.string, H),
+    sim = StringSimulator(p.rig.groups, geometry_waves(p.rig, lossless_string(p), H),
                           drive=_drive(p, "speed", drive_kp_nm_s_rad=3e4))
     sim.start_steady(9.6, 1.32, 1e-3)
     sim.set_commands(12.5, 1.32)            # more weight than the start's preload was for
@@ -115,8 +130,10 @@ def test_speed_mode_holds_the_set_point_in_stick_slip():
 
 def test_rig_in_torque_mode_spins_the_whole_string_up():
     """``Rig(string_model='distributed', top_drive=torque mode)`` and ``command_motor_torque``:
-    off bottom, a held motor torque T for t seconds gives every inertia (drive, pipe, BHA) the
-    mean speed T t / (J_TD + J_pipe + I) (2 %: the first mode still rings)."""
+    off bottom, a held motor torque T for t seconds gives every inertia (drive, pipe, BHA),
+    J = J_TD + J_pipe + I, against the pipe's viscous damping c L (the preset's), the mean
+    speed T/(c L) (1 - exp(-c L t/J)) (2 %: the first mode still rings; T t/J, 20 % more,
+    without the damping)."""
     p = load_preset("base")
     td = TopDriveParameters(top_drive_mode="torque")
     rig = Rig(p.rig, string_model="distributed", geometry=p.string, top_drive=td)
@@ -128,7 +145,9 @@ def test_rig_in_torque_mode_spins_the_whole_string_up():
     pipe_inertia = g.steel_density_kg_m3 * polar_moment_m4(g.pipe_od_m, g.pipe_id_m) \
         * g.pipe_length_m
     total = td.top_drive_inertia_kg_m2 + pipe_inertia + p.rig.bha_inertia_kg_m2
-    expected = 5e3 * rig.time_s / total
+    damping = g.torsional_damping_nm_s_per_rad_m * g.pipe_length_m
+    assert damping > 0.0
+    expected = 5e3 / damping * -math.expm1(-damping * rig.time_s / total)
     assert s.motor_torque_nm == 5e3
     assert s.off_bottom
     assert s.top_drive_speed_rad_s == pytest.approx(expected, rel=2e-2)
