@@ -189,7 +189,7 @@ def _measure(settings: LoopSettings) -> Callable[[RigSample, Measured], SurfaceM
 
 class _Commands:
     """The loop's commands into the session as the node takes them, each sent when its value
-    changes (the session holds it meanwhile; ``RigSession.send_command`` records it as the
+    changes (the session holds it meanwhile; ``SessionCommands.send`` records it as the
     message a driver would have sent)."""
 
     def __init__(self, session: RigSession) -> None:
@@ -209,7 +209,7 @@ class _Commands:
             self._one(TORQUE, (0.0, 0.0, 0.0, 0.0, 0.0, torque))
 
     def _one(self, topic: rig_topics.RigTopic, six: tuple[float, ...]) -> None:
-        refusal = self.session.send_command(topic, six)
+        refusal = self.session.commands.send(topic, six)
         if refusal is not None:
             raise ParameterError(f"the loop's {topic.name} command was refused: {refusal}")
 

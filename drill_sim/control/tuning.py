@@ -13,8 +13,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..core.parameters import ParameterError, RigParameters, StringGeometry, check_number
+from ..core.parameters import ParameterError, RigParameters, check_number
 from ..core.presets import Preset, load_preset
+from ..core.string_geometry import StringGeometry
 
 
 class SoftSpeedGains(NamedTuple):
@@ -41,14 +42,13 @@ def _geometry(source: Preset | StringGeometry | str) -> StringGeometry:
 
 
 def pipe_impedance(source: Preset | StringGeometry | str) -> float:
-    """Torsional characteristic impedance Z = J_p √(Gρ) of the drill pipe [N·m·s/rad].
+    """Torsional characteristic impedance Z = J_p √(Gρ) of the drill pipe at the top drive
+    (its top section) [N·m·s/rad].
 
     The torque a travelling wave carries per unit of angular speed: a top drive that looks
     like Z to the string absorbs every wave arriving from below.
     """
-    g = _geometry(source)
-    polar_moment_m4 = math.pi / 32.0 * (g.pipe_od_m**4 - g.pipe_id_m**4)
-    return polar_moment_m4 * math.sqrt(g.shear_modulus_pa * g.steel_density_kg_m3)
+    return _geometry(source).torsional_impedance_nm_s_rad
 
 
 def first_mode_frequency_hz(source: Preset | RigParameters | str,

@@ -13,17 +13,19 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from .metrics import Metrics
-    from .parameters import Groups, ParameterError, RigParameters, Scales, StringGeometry
+    from .parameters import Groups, ParameterError, RigParameters, Scales
     from .presets import Preset, load_preset, preset_names
     from .rig import RPM, Rig, RigSample
     from .simulator import DEFAULT_DT, Simulator, StateView, Trajectory
     from .stability import NoSteadyDrilling, StabilityResult, SteadyState, steady_state
+    from .string_geometry import StringGeometry, StringSection
     from .top_drive import DriveGroups, TopDriveParameters
     from .trajectory import SITrajectory
 
 _HOMES = {
     "metrics": ("Metrics",),
-    "parameters": ("Groups", "ParameterError", "RigParameters", "Scales", "StringGeometry"),
+    "parameters": ("Groups", "ParameterError", "RigParameters", "Scales"),
+    "string_geometry": ("StringGeometry", "StringSection"),
     "presets": ("Preset", "load_preset", "preset_names"),
     "rig": ("RPM", "Rig", "RigSample"),
     "simulator": ("DEFAULT_DT", "Simulator", "StateView", "Trajectory"),
@@ -36,7 +38,8 @@ _HOME_OF = {name: module for module, names in _HOMES.items() for name in names}
 __all__ = [
     "DEFAULT_DT", "RPM", "DriveGroups", "Groups", "Metrics", "NoSteadyDrilling", "ParameterError",
     "Preset", "Rig", "RigParameters", "RigSample", "SITrajectory", "Scales", "Simulator",
-    "StabilityResult", "StateView", "SteadyState", "StringGeometry", "TopDriveParameters",
+    "StabilityResult", "StateView", "SteadyState", "StringGeometry", "StringSection",
+    "TopDriveParameters",
     "Trajectory", "load_preset", "preset_names", "steady_state",
 ]
 

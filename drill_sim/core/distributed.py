@@ -18,11 +18,12 @@ transfer matrices (frequency domain) for the theory.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .parameters import ParameterError, RigParameters, StringGeometry, check_number
+from .parameters import ParameterError, RigParameters, check_number
+from .string_geometry import StringGeometry
 
 STRING_MODELS = ("lumped", "distributed")
 DAMPING_STATIONS = 8        # dashpots per section when it is damped (none when undamped)
@@ -44,7 +45,8 @@ def check_string_model(name: object) -> str:
 class Section:
     """A uniform tube of the pipe, SI. Viscous damping per unit length: torsional [N m s/rad
     per m], axial [N s/m per m]; material (Kelvin-Voigt) retardation times [s]: the shear
-    stress is G (strain + eta strain rate), likewise E axially. 0 (the defaults): lossless."""
+    stress is G (strain + eta strain rate), likewise E axially. 0 (the defaults): lossless.
+    Its material (moduli [Pa], density [kg/m^3]); None: ``string_waves``' arguments."""
 
     length_m: float
     od_m: float
@@ -53,6 +55,9 @@ class Section:
     axial_damping: float = 0.0
     torsional_retardation_s: float = 0.0
     axial_retardation_s: float = 0.0
+    shear_modulus_pa: float | None = None
+    young_modulus_pa: float | None = None
+    density_kg_m3: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("length_m", "od_m"):
@@ -61,6 +66,9 @@ class Section:
                      "axial_retardation_s"):
             object.__setattr__(self, name, check_number(name, getattr(self, name),
                                                         low_inclusive=True))
+        for name in ("shear_modulus_pa", "young_modulus_pa", "density_kg_m3"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, check_number(name, getattr(self, name)))
         if self.id_m >= self.od_m:
             raise ParameterError(f"id_m = {self.id_m!r} is out of range: expected < od_m")
 
@@ -75,11 +83,14 @@ class Section:
 
 def pipe_sections(geometry: StringGeometry, torsional_damping: float = 0.0,
                   axial_damping: float = 0.0) -> tuple[Section, ...]:
-    """The pipe of a preset's geometry as one section (the collars are the rigid BHA), with
-    the viscous damping given and the geometry's material damping."""
-    return (Section(geometry.pipe_length_m, geometry.pipe_od_m, geometry.pipe_id_m,
-                    torsional_damping, axial_damping, geometry.torsional_retardation_time_s,
-                    geometry.axial_retardation_time_s),)
+    """The pipe of a preset's geometry (its sections above the BHA, which is rigid), top
+    first, each with its material, the viscous damping given and the geometry's material
+    damping."""
+    return tuple(Section(x.length_m, x.od_m, x.id_m, torsional_damping, axial_damping,
+                         geometry.torsional_retardation_time_s,
+                         geometry.axial_retardation_time_s, geometry.shear_modulus(x),
+                         geometry.young_modulus(x), geometry.density(x))
+                 for x in geometry.pipe())
 
 
 @dataclass(frozen=True)
@@ -211,16 +222,17 @@ def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float,
         raise ParameterError("sections: expected at least one pipe section")
     sc = params.scales
     ts, c_scale = sc.time_s, sc.stiffness_nm_per_rad
-    rho = steel_density_kg_m3
     lines = []
-    for modulus, prop, damp, retard, imp_scale in (
-            (shear_modulus_pa, "polar_moment_m4", "torsional_damping", "torsional_retardation_s",
-             c_scale * ts),
-            (young_modulus_pa, "area_m2", "axial_damping", "axial_retardation_s",
-             sc.force_n * ts / sc.length_m)):
-        speed = math.sqrt(modulus / rho)
+    for modulus_name, default_modulus, prop, damp, retard, imp_scale in (
+            ("shear_modulus_pa", shear_modulus_pa, "polar_moment_m4", "torsional_damping",
+             "torsional_retardation_s", c_scale * ts),
+            ("young_modulus_pa", young_modulus_pa, "area_m2", "axial_damping",
+             "axial_retardation_s", sc.force_n * ts / sc.length_m)):
         z, delay, steps, frac, dash, rel, tau, eta, nu = [], [], [], [], [], [], [], [], []
         for sec in sections:
+            modulus = getattr(sec, modulus_name) or default_modulus
+            rho = sec.density_kg_m3 or steel_density_kg_m3
+            speed = math.sqrt(modulus / rho)
             per_length = getattr(sec, damp)
             e = getattr(sec, retard) / ts
             k = 0 if continuous or (per_length == 0.0 and e == 0.0) else stations
@@ -257,16 +269,19 @@ def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float,
 
 
 def geometry_waves(params: RigParameters, geometry: StringGeometry, h: float,
-                   young_modulus_pa: float = 200e9, torsional_damping: float | None = None,
+                   young_modulus_pa: float | None = None, torsional_damping: float | None = None,
                    axial_damping: float | None = None, continuous: bool = False) -> StringWaves:
-    """The wave lines of a preset's pipe (one section) at step ``h`` [t*]; viscous damping per
-    unit length (torsional [N m s/rad per m], axial [N s/m per m]) None: the geometry's.
-    ``continuous``: the theory's exact pipe (``string_waves``)."""
+    """The wave lines of a preset's pipe (its sections above the BHA) at step ``h`` [t*];
+    viscous damping per unit length (torsional [N m s/rad per m], axial [N s/m per m]) and
+    Young's modulus [Pa] None: the geometry's. ``continuous``: the theory's exact pipe
+    (``string_waves``)."""
     if torsional_damping is None:
         torsional_damping = geometry.torsional_damping_nm_s_per_rad_m
     if axial_damping is None:
         axial_damping = geometry.axial_damping_n_s_per_m2
-    return string_waves(params, pipe_sections(geometry, torsional_damping, axial_damping), h,
-                        shear_modulus_pa=geometry.shear_modulus_pa,
-                        young_modulus_pa=young_modulus_pa,
+    sections = pipe_sections(geometry, torsional_damping, axial_damping)
+    if young_modulus_pa is not None:
+        sections = tuple(replace(x, young_modulus_pa=young_modulus_pa) for x in sections)
+    return string_waves(params, sections, h, shear_modulus_pa=geometry.shear_modulus_pa,
+                        young_modulus_pa=geometry.young_modulus_pa,
                         steel_density_kg_m3=geometry.steel_density_kg_m3, continuous=continuous)

@@ -1,10 +1,11 @@
 """Named parameter sets shipped with the package, and the same format read from any YAML file.
 
 A preset file has a ``bit`` section (bit and rock, SI), either a ``string`` section (pipe and
-collar geometry, from which C, I, M and W_s are computed) or a ``lumped`` section (those four
-directly), optional default ``commands`` (``top_drive_speed_rpm``, ``weight_on_bit_kn``) and an
-optional ``top_drive`` section (``TopDriveParameters``' fields; the drive's proportional gain
-defaults to 50 Z, Z the pipe's torsional impedance, when the string's geometry is given).
+collar geometry, or a list of ``sections``, from which C, I, M and W_s are computed) or a
+``lumped`` section (those four directly), optional default ``commands``
+(``top_drive_speed_rpm``, ``weight_on_bit_kn``) and an optional ``top_drive`` section
+(``TopDriveParameters``' fields; the drive's proportional gain defaults to 50 Z, Z the top
+pipe section's torsional impedance, when the string's geometry is given).
 An optional ``string_model: lumped | distributed`` (default lumped) picks the string's model;
 ``distributed`` needs the ``string`` geometry.
 """
@@ -16,8 +17,9 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from .distributed import check_string_model
-from .parameters import ParameterError, RigParameters, StringGeometry, check_number
+from .parameters import ParameterError, RigParameters, check_number
 from .resources import read_yaml, shipped_names
+from .string_geometry import StringGeometry, StringSection
 from .top_drive import KP_PER_IMPEDANCE, TopDriveParameters
 
 _BIT_KEYS = ("bit_radius_m", "blade_count", "intrinsic_specific_energy_pa", "cutting_inclination",
@@ -68,9 +70,7 @@ def preset_from_dict(name: str, data: object) -> Preset:
     bit = _section(name, data, "bit", _BIT_KEYS, required=True)
     string = None
     if "string" in data:
-        keys = tuple(f.name for f in fields(StringGeometry))
-        string = StringGeometry(**_section(name, data, "string", keys, required=False,
-                                           need=keys[:6]))
+        string = string_from_dict(name, data["string"])
         lumped = string.lumped()
     else:
         lumped = _section(name, data, "lumped", _LUMPED_KEYS, required=True)
@@ -99,6 +99,36 @@ def preset_from_dict(name: str, data: object) -> Preset:
         top_drive=TopDriveParameters(**drive),
         string_model=string_model,
     )
+
+
+_SECTION_KEYS = tuple(f.name for f in fields(StringSection))
+
+
+def string_from_dict(name: str, string: object) -> StringGeometry:
+    """A preset's ``string`` section: the two-section keys (``pipe_*``, ``collar_*``) or
+    ``sections``, a list of ``{length_m, od_m, id_m, bha, shear_modulus_pa, young_modulus_pa,
+    steel_density_kg_m3}`` (the last four optional), top first."""
+    keys = tuple(f.name for f in fields(StringGeometry))
+    given = _section(name, {"string": string}, "string", keys, required=True, need=())
+    sections = given.pop("sections", None)
+    if sections is not None:
+        if not isinstance(sections, list) or not sections:
+            raise ParameterError(f"preset {name!r}: string.sections must be a list of "
+                                 "sections (mappings), top first")
+        parts = []
+        for i, section in enumerate(sections):
+            where = f"string.sections[{i}]"
+            row = _section(name, {where: section}, where, _SECTION_KEYS, required=True,
+                           need=_SECTION_KEYS[:3])
+            try:
+                parts.append(StringSection(**row))
+            except ParameterError as exc:
+                raise ParameterError(f"preset {name!r}: {where}: {exc}") from None
+        given["sections"] = tuple(parts)
+    try:
+        return StringGeometry(**given)
+    except ParameterError as exc:
+        raise ParameterError(f"preset {name!r}: string: {exc}") from None
 
 
 def _string_model(name: str, value: object, string: StringGeometry | None) -> str:

@@ -13,7 +13,7 @@ from typing import NamedTuple
 from . import kernel as kn
 from .distributed import check_string_model, geometry_waves
 from .distributed_simulator import StringSimulator
-from .parameters import ParameterError, RigParameters, StringGeometry, check_number
+from .parameters import ParameterError, RigParameters, check_number
 from .simulator import (
     DEFAULT_DT,
     STEPS_PER_PERIOD,
@@ -23,6 +23,7 @@ from .simulator import (
     resolves,
 )
 from .stability import SteadyState, steady_state
+from .string_geometry import StringGeometry
 from .top_drive import DriveGroups, TopDriveParameters
 
 RPM = 2.0 * math.pi / 60.0   # rad/s per rpm

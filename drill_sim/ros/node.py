@@ -157,7 +157,7 @@ class RigNode(Node):
             return
         accepted = 0
         topics: set[str] = set()
-        command = self.session.command
+        command = self.session.commands.command
         for c in batch:
             refusal = command(c.topic, c.frame_id, c.six, c.data, (c.sec, c.nanosec))
             if refusal is None:
@@ -171,7 +171,7 @@ class RigNode(Node):
                 self.get_logger().warning(f"refused {what} = {value!r}: expected {expected}; "
                                           "holding the last valid command",
                                           throttle_duration_sec=1.0)
-        self.session.commands_taken(accepted, len(topics))
+        self.session.commands.taken(accepted, len(topics))
 
     # ---- services ----------------------------------------------------------------------
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
@@ -230,7 +230,8 @@ class RigNode(Node):
         """The session's status (``session.diagnostics.rig_status``) as a DiagnosticArray."""
         session, inbox = self.session, self.commands
         status = session.status(other_publishers=self.other_publishers(), commands=CommandCounts(
-            inbox.received, session.superseded, inbox.lost, inbox.lost - self._lost_before))
+            inbox.received, session.commands.superseded, inbox.lost,
+            inbox.lost - self._lost_before))
         self._lost_before = inbox.lost
         array = DiagnosticArray(status=[DiagnosticStatus(
             level=bytes([status.level]), name=f"{self.get_name()}: rig", message=status.message,

@@ -198,7 +198,7 @@ class _Rerun:
     def command(self, topic: rig_topics.RigTopic, data: bytes) -> None:
         """A recorded command, accepted or refused by the session's own rule."""
         frame, _, _, six = cdr.decode_command(topic.type_name, data)
-        if self.session.command(topic, frame, six) is None:
+        if self.session.commands.command(topic, frame, six) is None:
             self.result.commands += 1
         else:
             self.result.refused += 1

@@ -4,26 +4,26 @@ the tests all run.
 It owns the ``Rig``, its ``SensorBank``, the encoders of the rig's messages, the recorder, the
 time offset of resets, pause/step/reset, the commands and their rules (the in-flight rule of a
 drive-mode change included), run-time parameter changes (all or nothing), the pacing and the
-lockstep rule, and the events a bag records. Its verbs are the session's: ``command``,
-``advance`` and ``emit`` (a tick: advance, then the tick's outputs as bytes), ``reset``,
-``change``, ``status``. A ROS node only binds it to topics and services (``drill_sim.ros.node``).
+lockstep rule, and the events a bag records. Its verbs are the session's: ``commands``
+(``SessionCommands``: ``command``, ``send``, ``receive``), ``advance`` and ``emit`` (a tick:
+advance, then the tick's outputs as bytes), ``reset``, ``change``, ``status``. A ROS node
+only binds it to topics and services (``drill_sim.ros.node``).
 """
 
 from __future__ import annotations
 
 import logging
-import struct
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from ..core import NoSteadyDrilling, ParameterError
 from ..core.figures import figures_line
-from ..core.parameters import StringGeometry
 from ..core.rig import RigSample
 from ..core.sensor_profile import SensorProfile
 from ..core.sensors import Measured, session_sensors
-from ..wire import WireError, cdr, rig_topics
+from ..core.string_geometry import StringGeometry
+from ..wire import rig_topics
 from . import rules
 from .diagnostics import CommandCounts, Status, rig_status
 from .lockstep import Lockstep
@@ -33,12 +33,9 @@ from .recorder import SessionRecorder
 from .rig_messages import TickOutputs
 from .scenario import Scenario
 from .scenario_player import ScenarioPlayer
-
-# a command for the top-drive mode the drive left this recently [s] was in flight at the switch
-IN_FLIGHT_S = 0.5
+from .session_commands import SessionCommands
 
 Send = Callable[[bytes], object]
-_ENCODE_COMMAND = cdr.stamped_vectors(rig_topics.FRAME_TOP_DRIVE)   # the drive's commands
 
 
 @dataclass(frozen=True)
@@ -87,9 +84,6 @@ class RigSession:
         self.outputs = self.tick_outputs.topics        # in publishing order
         self.offset_s = 0.0                      # simulated time before the last reset
         self.paused = bool(self.p.get("start_paused", False))
-        self.superseded = 0                      # commands replaced within their tick
-        self.received = 0                        # commands received (recorded or not)
-        self._mode_left: tuple[str, float] | None = None    # top-drive mode left, wall time
         self.last: tuple[int, RigSample, Measured] | None = None   # stamp, sample, reading
         self.lockstep = Lockstep(tuple("~/" + n for n in self.p["lockstep_topics"]),
                                  self.p["lockstep_timeout_s"]) if self.p.get("lockstep") else None
@@ -98,7 +92,7 @@ class RigSession:
                            self.back_to_back(self.p), self.p.get("diagnostics_period_s", 1.0),
                            self.rig.time_s, clock=clock)
         self._steps_per_tick = self._tick_steps(self.p.get("rate_hz", 1000.0))
-        self.last_command_s = clock()
+        self.commands = SessionCommands(self)    # command, send, receive: the node's rules
         self.player: ScenarioPlayer | None = None
         self.switch_pending = None              # a controller switch not yet confirmed
         self.sample_held = False                # a tick's sample held until it is
@@ -135,59 +129,6 @@ class RigSession:
         """The stamp of the current sample [ns]: simulated time with /clock, else the wall
         clock at start plus simulated time."""
         return self.epoch_ns + round(self.sim_time_s * 1e9)
-
-    # ---- commands ------------------------------------------------------------------
-    def command(self, topic: rig_topics.RigTopic, frame_id: str, six, data: bytes = b"",
-                stamp: tuple[int, int] = (0, 0), *, internal: bool = False
-                ) -> rules.Refusal | str | None:
-        """A command as it arrived on ``topic`` (``six``: its six float64 or a JointCommand;
-        ``data``, its bytes, recorded; ``stamp``, its header stamp (sec, nanosec)). Accepted
-        (None), it is held from now on; refused, the refusal (what, value, expected), or
-        "in flight" for a command of the drive mode the rig left less than IN_FLIGHT_S ago
-        (sent before the switch: dropped without a warning). ``internal``: the session's own
-        scenario's set-point, which no lockstep tick waits for."""
-        self.received += 1
-        if self.recorder is not None:
-            self.recorder.record_command(topic, data, *stamp)
-        if self.lockstep is not None and not internal:
-            self.lockstep.offer(topic.name, stamp[0] * 1_000_000_000 + stamp[1])
-        refusal = rules.apply_command(self.rig, self.p, topic.command, frame_id, six)
-        if refusal is None:
-            return None
-        return "in flight" if self._in_flight(topic) else refusal
-
-    def send_command(self, topic: rig_topics.RigTopic, six: Sequence[float], *,
-                     internal: bool = False) -> rules.Refusal | str | None:
-        """A command the session's own driver makes (a scenario's set-point, the offline loop's
-        law), stamped now: recorded as the message a driver would have sent (its bytes, only
-        when recording), then ``command``."""
-        sec, nsec = divmod(self.stamp_ns(), 1_000_000_000)
-        data = _ENCODE_COMMAND(sec, nsec, six) if self.recorder is not None else b""
-        return self.command(topic, rig_topics.FRAME_TOP_DRIVE, six, data, (sec, nsec),
-                            internal=internal)
-
-    def receive(self, topic: rig_topics.RigTopic, data: bytes) -> rules.Refusal | str | None:
-        """A command message's CDR bytes as they arrived on ``topic``: decoded, then
-        ``command``. Bytes that do not decode are refused as such (and not recorded)."""
-        try:
-            frame_id, sec, nanosec, six = cdr.decode_command(topic.type_name, data)
-        except (WireError, struct.error) as exc:
-            return f"{topic.name} message", f"{len(data)} bytes", f"a CDR message ({exc})"
-        return self.command(topic, frame_id, six, data, (sec, nanosec))
-
-    def commands_taken(self, accepted: int, topics: int) -> None:
-        """A tick's batch taken: ``accepted`` commands on ``topics`` distinct topics (the
-        others in the tick were superseded within it)."""
-        if accepted:
-            self.last_command_s = self.clock()
-            self.superseded += accepted - topics
-
-    def _in_flight(self, topic: rig_topics.RigTopic) -> bool:
-        left = self._mode_left
-        if left is None or self.clock() - left[1] > IN_FLIGHT_S:
-            return False
-        rule = rules.COMMANDS.get(topic.command)
-        return rule is not None and rule.mode == left[0]
 
     # ---- the tick ------------------------------------------------------------------
     def advance(self, ticks: int) -> bool:
@@ -335,7 +276,7 @@ class RigSession:
         Raises ParameterError, the session as it was, if the rig refuses them."""
         changed = rules.apply_changes(self.rig, self.p, new)
         if new.get("top_drive_mode") != self.p.get("top_drive_mode"):
-            self._mode_left = (self.p.get("top_drive_mode"), self.clock())
+            self.commands.mode_left(self.p.get("top_drive_mode"))
         self.p = dict(new)
         if changed & set(rules.RIG_FIELDS):
             self.log.info(f"rig figures now: {self.figures()}")
@@ -367,7 +308,7 @@ class RigSession:
         return rig_status(
             self.rig.sample(), metrics, ticks, paused=self.paused,
             record_error=self.recorder.error if self.recorder is not None else None,
-            command_age_s=now - self.last_command_s, command_timeout_s=p["command_timeout_s"],
+            command_age_s=now - self.commands.last_s, command_timeout_s=p["command_timeout_s"],
             rate_hz=expected_hz, max_speed=self.pacer.max_speed,
             lockstep=None if self.lockstep is None else self.lockstep.status(now),
             sim_time_s=self.sim_time_s, real_time_factor=p["real_time_factor"],

@@ -6,13 +6,15 @@ re-run does exactly what the node did.
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
-from ..core.parameters import ParameterError, RigParameters, StringGeometry
+from ..core.parameters import ParameterError, RigParameters
 from ..core.rig import Rig
+from ..core.string_geometry import StringGeometry, StringSection
 from ..core.top_drive import TopDriveParameters
 
 COMMAND_FRAMES = ("", "top_drive")        # frame_id accepted on commands
@@ -79,16 +81,31 @@ def make_rig(p: dict[str, object], dt_s: float | None = None,
 
 
 def geometry_record(geometry: StringGeometry) -> dict[str, str]:
-    """The pipe geometry as a bag's ``string`` metadata record (field -> exact text)."""
-    return {f.name: repr(float(getattr(geometry, f.name))) for f in fields(StringGeometry)}
+    """The pipe geometry as a bag's ``string`` metadata record (field -> exact text; the
+    sections, if it has them, as a JSON list of their given fields)."""
+    record = {}
+    for f in fields(StringGeometry):
+        value = getattr(geometry, f.name)
+        if f.name == "sections":
+            if value:
+                record["sections"] = json.dumps([
+                    {k.name: getattr(x, k.name) for k in fields(x)
+                     if getattr(x, k.name) is not None} for x in value])
+        elif value is not None:
+            record[f.name] = repr(float(value))
+    return record
 
 
 def geometry_from_record(record: dict[str, str]) -> StringGeometry:
     """The geometry ``geometry_record`` wrote (ParameterError if it is not one)."""
     names = {f.name for f in fields(StringGeometry)}
     try:
-        return StringGeometry(**{k: float(v) for k, v in record.items() if k in names})
-    except (TypeError, ValueError) as exc:
+        given: dict[str, object] = {k: float(v) for k, v in record.items()
+                                    if k in names and k != "sections"}
+        if "sections" in record:
+            given["sections"] = tuple(StringSection(**x) for x in json.loads(record["sections"]))
+        return StringGeometry(**given)
+    except (TypeError, ValueError, AttributeError) as exc:
         raise ParameterError(f"string record {record!r}: not a pipe geometry ({exc})") from None
 
 

@@ -91,9 +91,9 @@ class ScenarioPlayer:
             if six[5 - 3 * k] == held[k]:
                 continue
             held[k] = six[5 - 3 * k]
-            refusal = session.send_command(topic, six, internal=True)
+            refusal = session.commands.send(topic, six, internal=True)
             if refusal is None:
-                session.last_command_s = session.clock()     # the rig is being commanded
+                session.commands.last_s = session.clock()     # the rig is being commanded
             elif refusal != "in flight":
                 session.log.warning(f"scenario '{sc.name}': {topic.name} at {t:.3f} s refused: "
                                  f"{refusal}")

@@ -108,12 +108,13 @@ def test_the_evaluation_takes_the_rigs_shipped_scenarios_by_name():
         named(["no_such_set"])
 
 
-def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base):
+def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base, tmp_path):
     """The offline loop's semantics, computed independently on a bare ``Rig``: set-point and
     hook load k held over k..k+1, the motor torque answered to sample k applied over
     k..k+1, the drive's stiff loop until sample ceil(switch_on_s / h), then the law, bumpless;
     the window from sample ceil(window_start_s / h). Speed and WOB both ramp, so a set-point
-    or a load a tick early or late shows."""
+    or a load a tick early or late shows. Its bag holds the speed set-point, the hook load
+    and the motor torque each as a driver sends it, once per change, stamped at its tick."""
     from drill_sim.control.closed_loop import session_parameters, tick_commands
     from drill_sim.control.evaluation import ideal_measurement, law_gains, law_top_drive
     from drill_sim.control.supervisor import Supervisor
@@ -124,7 +125,7 @@ def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base):
                                   window_start_s=0.6, switch_on_s=0.3)
     settings = LoopSettings(law="z_torque")
     h = settings.sample_period_s
-    result = run_loop(base, scenario, settings)
+    result = run_loop(base, scenario, settings, record=tmp_path / "z")
 
     p = session_parameters(base, scenario, settings)
     rig = rules.make_rig(p)
@@ -170,6 +171,10 @@ def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base):
     on_limit = [abs(abs(o) - 6e4) < 1e-4 for o in law_out[600:]]
     assert result.saturation_fraction == pytest.approx(sum(on_limit) / len(on_limit))
     assert result.saturation_time_s == pytest.approx(result.saturation_fraction * 0.4)
+    sent = _commands_in_bag(tmp_path / "z", ("top_drive", "hook_load", "top_drive_torque"))
+    for rule, values, place in (("top_drive", speed, 5), ("hook_load", hook, 2),
+                                ("top_drive_torque", law_out, 5)):
+        _assert_sent_once_per_change(sent[rule], values, place, h, rule)
 
 
 def test_a_kinematic_loop_is_the_rig_commanded_by_hand_and_its_bag_holds_each_command_once(
@@ -177,10 +182,8 @@ def test_a_kinematic_loop_is_the_rig_commanded_by_hand_and_its_bag_holds_each_co
     """The kinematic row: set-point and hook load k held over k..k+1 on a bare ``Rig``; the
     bag holds each command as a driver sends it (its one component, stamped at the tick it
     was given) and once per change, not once per tick."""
-    from drill_sim.bag.bag import opened
     from drill_sim.control.closed_loop import session_parameters, tick_commands
     from drill_sim.session import rules
-    from drill_sim.wire import cdr, rig_topics
     scenario = Scenario.of_points("ramps", ((0.0, 60.0), (0.1, 60.0), (0.3, 70.0)),
                                   ((0.0, 100.0), (0.2, 100.0), (0.25, 110.0)),
                                   duration_s=0.4, window_start_s=0.2)
@@ -198,21 +201,35 @@ def test_a_kinematic_loop_is_the_rig_commanded_by_hand_and_its_bag_holds_each_co
     assert list(result.series["bit_speed_rad_s"]) == bit
     assert list(result.series["law_output"]) == list(speed)        # the pass-through
 
-    sent = {"top_drive": [], "hook_load": []}
-    with opened(tmp_path / "k") as bag:
+    sent = _commands_in_bag(tmp_path / "k", ("top_drive", "hook_load"))
+    for rule, values, place in (("top_drive", speed, 5), ("hook_load", hook, 2)):
+        _assert_sent_once_per_change(sent[rule], values, place, 1e-3, rule)
+
+
+def _commands_in_bag(path, rules: tuple[str, ...]) -> dict[str, list]:
+    """(stamp [s], the six components) of each command a bag holds, by the node's rule."""
+    from drill_sim.bag.bag import opened
+    from drill_sim.wire import cdr, rig_topics
+    sent = {rule: [] for rule in rules}
+    with opened(path) as bag:
         for m in bag.messages():
             for rule in sent:
                 topic = rig_topics.COMMAND_BY_RULE[rule]
                 if m.topic == topic.under("/" + rig_topics.NODE_NAME):
                     _, sec, nsec, six = cdr.decode_command(topic.type_name, m.data)
                     sent[rule].append((sec + nsec * 1e-9, six))
-    for rule, values, place in (("top_drive", speed, 5), ("hook_load", hook, 2)):
-        changes = [k for k in range(speed.size - 1) if k == 0 or values[k] != values[k - 1]]
-        assert len(sent[rule]) == len(changes), rule               # once per change
-        for (stamp_s, six), k in zip(sent[rule], changes, strict=True):
-            assert stamp_s == pytest.approx(k * 1e-3, abs=1e-9)    # given at tick k
-            assert six[place] == values[k]
-            assert [v for i, v in enumerate(six) if i != place] == [0.0] * 5
+    return sent
+
+
+def _assert_sent_once_per_change(sent, values, place: int, tick_s: float, rule: str) -> None:
+    """A command per change of ``values`` (ticks 0 .. n-2: the last tick has no step after
+    it), stamped at its tick, the value in component ``place`` and the others 0."""
+    changes = [k for k in range(len(values) - 1) if k == 0 or values[k] != values[k - 1]]
+    assert len(sent) == len(changes), rule                             # once per change
+    for (stamp_s, six), k in zip(sent, changes, strict=True):
+        assert stamp_s == pytest.approx(k * tick_s, abs=1e-9), rule    # given at tick k
+        assert six[place] == values[k], rule
+        assert [v for i, v in enumerate(six) if i != place] == [0.0] * 5, rule
 
 
 def test_the_loops_session_parameters_are_the_settings_and_the_scenarios(base):

@@ -13,7 +13,8 @@ import pytest
 from drill_sim.core import RPM, ParameterError, load_preset
 from drill_sim.session.parameter_table import specs
 from drill_sim.session.resim import resimulate
-from drill_sim.session.rig_session import IN_FLIGHT_S, RigSession
+from drill_sim.session.rig_session import RigSession
+from drill_sim.session.session_commands import IN_FLIGHT_S
 from drill_sim.wire import cdr, rig_topics
 
 SPEED = rig_topics.topic("~/cmd/top_drive")
@@ -48,7 +49,7 @@ def speed_command(session: RigSession, rad_s: float, frame: str = "top_drive"):
     stamp_ns = session.stamp_ns()
     sec, nsec = divmod(stamp_ns, 1_000_000_000)
     data = cdr.stamped_vectors(frame)(sec, nsec, (0, 0, 0, 0, 0, rad_s))
-    return session.receive(SPEED, data)
+    return session.commands.receive(SPEED, data)
 
 
 class Sent:
@@ -84,7 +85,7 @@ def test_a_refused_command_leaves_the_rig_untouched(base, value, frame, words):
 
 def test_bytes_that_do_not_decode_are_refused(base):
     s = RigSession(params(base))
-    refusal = s.receive(SPEED, b"\x00\x01\x00\x00abc")
+    refusal = s.commands.receive(SPEED, b"\x00\x01\x00\x00abc")
     assert refusal is not None and "CDR" in refusal[2]
 
 
@@ -92,12 +93,12 @@ def test_a_torque_command_needs_torque_mode_and_one_in_flight_is_dropped(base):
     clock = Clock()
     s = RigSession(params(base, top_drive_mode="torque"), clock=clock)
     data = TWIST(0, 0, (0, 0, 0, 0, 0, 1000.0))
-    assert s.receive(TORQUE, data) is None
+    assert s.commands.receive(TORQUE, data) is None
     s.change(dict(s.p, top_drive_mode="speed"))
     clock.now += 0.3                                        # sent 0.3 s before it came
-    assert s.receive(TORQUE, data) == "in flight"          # crossed the switch on the way
+    assert s.commands.receive(TORQUE, data) == "in flight"          # crossed the switch on the way
     clock.now += IN_FLIGHT_S - 0.3 + 0.01
-    refusal = s.receive(TORQUE, data)
+    refusal = s.commands.receive(TORQUE, data)
     assert refusal != "in flight" and "top_drive_mode = torque" in refusal[2]
 
 
@@ -166,13 +167,14 @@ def test_lockstep_holds_the_tick_until_every_topic_answers_its_stamp(base):
     ls = s.lockstep
     assert not ls.complete
     sec, nsec = divmod(stamp, 1_000_000_000)
-    s.receive(SPEED, TWIST(sec, nsec + 1, (0, 0, 0, 0, 0, 6.0)))     # not this tick's stamp,
-    s.receive(HOOK, TWIST(sec, nsec + 1, (0, 0, 5e5, 0, 0, 0)))      # later ones
-    s.receive(SPEED, TWIST(sec, nsec - 1, (0, 0, 0, 0, 0, 6.0)))     # nor an earlier one
+    receive = s.commands.receive
+    receive(SPEED, TWIST(sec, nsec + 1, (0, 0, 0, 0, 0, 6.0)))     # not this tick's stamp,
+    receive(HOOK, TWIST(sec, nsec + 1, (0, 0, 5e5, 0, 0, 0)))      # later ones
+    receive(SPEED, TWIST(sec, nsec - 1, (0, 0, 0, 0, 0, 6.0)))     # nor an earlier one
     assert not ls.complete
-    s.receive(SPEED, TWIST(sec, nsec, (0, 0, 0, 0, 0, 6.0)))
+    receive(SPEED, TWIST(sec, nsec, (0, 0, 0, 0, 0, 6.0)))
     assert not ls.complete                                  # the hook load has not answered
-    s.receive(HOOK, TWIST(sec, nsec, (0, 0, 5e5, 0, 0, 0)))
+    receive(HOOK, TWIST(sec, nsec, (0, 0, 5e5, 0, 0, 0)))
     assert ls.complete
 
 
