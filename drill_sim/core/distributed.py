@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .parameters import ParameterError, RigParameters, check_number
-from .string_geometry import StringGeometry
+from .string_geometry import StringGeometry, area_m2, polar_moment_m4
 
 STRING_MODELS = ("lumped", "distributed")
 DAMPING_STATIONS = 8        # dashpots per section when it is damped (none when undamped)
@@ -74,11 +74,11 @@ class Section:
 
     @property
     def polar_moment_m4(self) -> float:
-        return math.pi / 32.0 * (self.od_m**4 - self.id_m**4)
+        return polar_moment_m4(self.od_m, self.id_m)
 
     @property
     def area_m2(self) -> float:
-        return math.pi / 4.0 * (self.od_m**2 - self.id_m**2)
+        return area_m2(self.od_m, self.id_m)
 
 
 def pipe_sections(geometry: StringGeometry, torsional_damping: float = 0.0,

@@ -10,6 +10,16 @@ from dataclasses import dataclass, fields
 from .parameters import GRAVITY_M_S2, ParameterError, check_number
 
 
+def polar_moment_m4(od_m: float, id_m: float) -> float:
+    """A tube's polar moment of area [m^4]."""
+    return math.pi / 32.0 * (od_m**4 - id_m**4)
+
+
+def area_m2(od_m: float, id_m: float) -> float:
+    """A tube's cross-section [m^2]."""
+    return math.pi / 4.0 * (od_m**2 - id_m**2)
+
+
 @dataclass(frozen=True)
 class StringSection:
     """One uniform tube of the string, SI: length, outer and inner diameter; ``bha``: part of
@@ -39,11 +49,11 @@ class StringSection:
 
     @property
     def polar_moment_m4(self) -> float:
-        return math.pi / 32.0 * (self.od_m**4 - self.id_m**4)
+        return polar_moment_m4(self.od_m, self.id_m)
 
     @property
     def area_m2(self) -> float:
-        return math.pi / 4.0 * (self.od_m**2 - self.id_m**2)
+        return area_m2(self.od_m, self.id_m)
 
 
 @dataclass(frozen=True)

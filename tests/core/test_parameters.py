@@ -39,6 +39,16 @@ def test_shipped_presets_differ_only_in_string_length(base):
     assert load_preset("deep").rig.torsional_stiffness_nm_per_rad == pytest.approx(c / 3)
 
 
+def test_long_is_deep_on_the_distributed_string():
+    """``long``: the base bit and BHA on 3000 m of the damped pipe, the distributed string by
+    default (for on-bottom controller tests); its rig and drive are deep's."""
+    long, deep = load_preset("long"), load_preset("deep")
+    assert long.string_model == "distributed" and deep.string_model == "lumped"
+    assert long.string == deep.string and long.rig == deep.rig
+    assert long.top_drive == deep.top_drive
+    assert long.string.pipe_length_m == 3000.0 and long.string.torsional_damping_nm_s_per_rad_m > 0
+
+
 def test_groups_to_si_and_back(base):
     target = Groups(n=3, psi=5.0, lam=3.0, beta=0.5)
     rig = base.rig.with_groups(target)
