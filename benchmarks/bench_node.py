@@ -14,8 +14,8 @@ in torque mode and the benchmark closing the loop like a controller: for every
 the top-drive speed, 60 rpm), so the node takes a command every tick.
 
 With --sensor-profile NAME every node runs that sensor profile (msg_docs/sensors.md);
---string-model lumped|distributed sets every node's string_model; --rate-only prints only
-the 1000 Hz rate and CPU.
+--string-model lumped|distributed sets every node's string_model, --preset NAME its preset;
+--rate-only prints only the 1000 Hz rate and CPU.
 
 Beside each 1000 Hz run, a do-nothing 1 kHz sleeper in a third process (bench_wakeups.py)
 measures this machine's own wake-up floor over the same seconds, under the same load: a node
@@ -218,6 +218,7 @@ def main() -> None:
                         default="kinematic")
     parser.add_argument("--sensor-profile", default="ideal")
     parser.add_argument("--string-model", choices=("lumped", "distributed"), default=None)
+    parser.add_argument("--preset", default=None, help="every node's preset (default: base)")
     parser.add_argument("--rate-only", action="store_true")
     parser.add_argument("--thread-priority", type=int, default=0, metavar="PRIORITY",
                         help="the nodes' thread_priority (SCHED_FIFO), and the benchmark's "
@@ -233,6 +234,8 @@ def main() -> None:
         NODE_ARGS.extend(["-p", f"thread_priority:={args.thread_priority}"])
     if args.string_model:
         NODE_ARGS.extend(["-p", f"string_model:={args.string_model}"])
+    if args.preset:
+        NODE_ARGS.extend(["-p", f"preset:={args.preset}"])
     os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     rclpy.init()

@@ -16,6 +16,7 @@ import numpy as np
 from ..bag.errors import BagError
 from ..bag.series import RigSeries, rig_series
 from ..core import RPM, load_preset
+from ..core.distributed import STRING_MODELS
 from ..core.stick_slip import severity_index
 from ..programs import program
 from ..session.diagnostics import drilling_regime
@@ -49,6 +50,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="bag directory to record the session into (default: "
                              "drill_sim_session_<date>-<time> here)")
     parser.add_argument("--no-record", action="store_true", help="do not record the session")
+    parser.add_argument("--string-model", choices=STRING_MODELS, default=None,
+                        help="the drill string's model on the rig, and the controller's tuning "
+                             "for it: lumped (one torsional spring) or distributed (the pipe's "
+                             "torsional and axial waves, damped); default: the preset's "
+                             "(base: lumped)")
     parser.add_argument("--no-controller", action="store_true",
                         help="ignore the scenario's controller section (the driller alone)")
     parser.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, default=[],
@@ -63,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
                          "expected one of them")
     scenario = load_scenario(args.scenario)
     preset = load_preset(args.preset)
+    string_model = args.string_model or preset.string_model
     duration = scenario.duration_s if args.duration is None else in_range(
         "--duration", args.duration, 0.0, MAX_DURATION_S, unit="s", low_open=True,
         what="a wall time")
@@ -77,6 +84,7 @@ def run(args: argparse.Namespace) -> int:
     # the rig plays the scenario itself, on its simulated clock (every event on its tick)
     played = Path(args.scenario)
     node_cmd = [program("drill_sim_node"), "--ros-args", "-p", f"preset:={args.preset}",
+                "-p", f"string_model:={string_model}",
                 "-p", f"initial_state:={scenario.initial_state}",
                 "-p", f"scenario:={played.absolute() if played.is_file() else args.scenario}",
                 *(("-p", f"record:={bag.absolute()}") if bag is not None else ()),
@@ -85,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     clients: list[list[str]] = []
     if switch is not None:
         node_cmd[2:2] = ["-p", "top_drive_mode:=speed"]     # the user's -p come later, and win
-        clients.append(controller_command(preset, switch.law))
+        clients.append(controller_command(preset, switch.law, string_model))
     else:
         node_cmd[2:2] = ["-p", "scenario_controller:=''"]   # a switch is only recorded
     watched = watch_session(node_cmd, clients, duration, sys.stdout.isatty(), _status_line)
@@ -106,13 +114,14 @@ def run(args: argparse.Namespace) -> int:
     if series.time_s.size < 2:
         print("drill_sim run: no samples received from the rig", file=sys.stderr)
         return 1
-    _summary(series, whence, scenario.name, preset.name)
+    _summary(series, whence, scenario.name, f"'{preset.name}' ({string_model} string)")
     marks = {}
     if switch is not None:
         compared = _before_after(series, switch.law, switch.on_at_s)
         if compared:
             marks[switch.on_at_s] = f"{switch.law} on: SSI {compared}"
-    plot_rig_series(args.plot, series, title=f"drill_sim run: {scenario.name} on {preset.name}",
+    plot_rig_series(args.plot, series, title=f"drill_sim run: {scenario.name} on {preset.name}, "
+                                             f"{string_model} string",
                     marks=marks)
     print(f"plot written to {args.plot}")
     if bag is not None and bag.is_dir():
@@ -121,10 +130,10 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def controller_command(preset, law: str) -> list[str]:
-    """``drill_sim_controller``, disabled, for this preset's string and drive: the reference
-    gains (``control.reference``), the drive's limits, and the rig's drive mode managed (torque
-    when on, speed when off)."""
+def controller_command(preset, law: str, string_model: str = "lumped") -> list[str]:
+    """``drill_sim_controller``, disabled, for this preset's string (on ``string_model``) and
+    drive: the reference gains (``control.reference``), the drive's limits, and the rig's
+    drive mode managed (torque when on, speed when off)."""
     from ..control.reference import reference_gains
     from ..control.tuning import pipe_impedance
     drive = preset.top_drive
@@ -137,7 +146,7 @@ def controller_command(preset, law: str) -> list[str]:
               f"{law}.torque_min_nm": drive.motor_torque_min_nm,
               f"{law}.torque_max_nm": drive.motor_torque_max_nm}
     params.update({f"{law}.{k}": v for k, v in reference_gains(
-        law, preset, drive.top_drive_inertia_kg_m2).items()})
+        law, preset, drive.top_drive_inertia_kg_m2, string_model=string_model).items()})
     cmd = [program("drill_sim_controller"), "--ros-args"]
     for name, value in params.items():
         text = str(value).lower() if isinstance(value, bool) else (
@@ -212,7 +221,7 @@ def _summary(series: RigSeries, whence: str, scenario: str, preset: str) -> None
     elapsed = series.time_s[-1] - series.time_s[0]
     whole = series.metrics()
     last = series.window(elapsed - min(20.0, elapsed / 2), None).metrics()
-    print(f"drill_sim run: scenario '{scenario}' on preset '{preset}', {elapsed:.3f} s "
+    print(f"drill_sim run: scenario '{scenario}' on preset {preset}, {elapsed:.3f} s "
           f"simulated, {whole['samples']} samples ({whence})")
     if elapsed > 0:                       # fewer than rate_hz: ticks the machine delayed
         print(f"  samples a simulated s  {whole['samples'] / elapsed:8.0f} (rate_hz ticks; "

@@ -64,37 +64,50 @@ NOD = kn.NO + 4
 
 
 @njit(cache=True, inline="always")
-def _arrivals(buf, off, n_seg, frac, z, slot_of, k, a_in, b_in, tau, state, h):
+def _arrivals(buf, off, n_seg, frac, z, slot_of, a_in, b_in, lowpass, state, new_state):
     """Invariants arriving this step: a at each segment's bottom, b at its top (``n_seg``: the
-    slots per direction, N + 1), each through the segment's material low-pass if it has one
-    (time constant tau, trapezoidal: y+ = y + (h/tau)(x - (y + y+)/2), the step mean
-    (y + y+)/2 arrives, ``state`` holds y); returns the transport loss's rate and the
-    low-passes' dissipation rate (times h: their energies; a low-pass stores tau y^2/(4 z)
-    and dissipates (x - mean)^2/(4 z), exactly, step by step)."""
+    slots per direction, N + 1; ``slot_of``: steps mod N + 1), each through the segment's
+    material low-pass if it has one (time constant tau, trapezoidal: y+ = y + (h/tau)(x -
+    (y + y+)/2), i.e. y+ = keep y + gain x with ``lowpass`` rows keep = (1 - r)/(1 + r) and
+    gain = 2 r/(1 + r), r = h/(2 tau), gain 0: none; the step mean (y + y+)/2 arrives;
+    ``state`` holds y, ``new_state`` gets y+, kept only if the step is: ``_keep``); returns
+    the transport loss's rate and the low-passes' dissipation rate (times h: their energies;
+    a low-pass stores tau y^2/(4 z) and dissipates (x - mean)^2/(4 z), exactly, step by
+    step)."""
     loss = 0.0
     damped = 0.0
     for j in range(n_seg.size):
         m, f = n_seg[j], frac[j]
-        old = k % m
+        old = slot_of[j]
         new = old + 1 if old + 1 < m else 0
-        slot_of[j] = old
         a0, a1 = buf[off[j] + old], buf[off[j] + new]
         b0, b1 = buf[off[j] + m + old], buf[off[j] + m + new]
         a_x = a1 + f * (a0 - a1)
         b_x = b1 + f * (b0 - b1)
         loss += f * (1.0 - f) * ((a1 - a0) ** 2 + (b1 - b0) ** 2) / (4.0 * z[j])
-        if tau[j] > 0.0:
-            r = 0.5 * h / tau[j]
+        gain = lowpass[1, j]
+        if gain > 0.0:
+            keep = lowpass[0, j]
             ya, yb = state[0, j], state[1, j]
-            ya_new = (ya * (1.0 - r) + 2.0 * r * a_x) / (1.0 + r)
-            yb_new = (yb * (1.0 - r) + 2.0 * r * b_x) / (1.0 + r)
-            state[0, j], state[1, j] = ya_new, yb_new
+            ya_new = keep * ya + gain * a_x
+            yb_new = keep * yb + gain * b_x
+            new_state[0, j], new_state[1, j] = ya_new, yb_new
             a_m, b_m = 0.5 * (ya + ya_new), 0.5 * (yb + yb_new)
             damped += ((a_x - a_m) ** 2 + (b_x - b_m) ** 2) / (4.0 * z[j])
             a_x, b_x = a_m, b_m
         a_in[j] = a_x
         b_in[j] = b_x
     return loss, damped
+
+
+@njit(cache=True, inline="always")
+def _keep(n_seg, lowpass, state, new_state, slot_of):
+    """The step taken: the low-passes' new states kept, each segment's slot one step on
+    (steps mod (N + 1), without a division)."""
+    for j in range(n_seg.size):
+        if lowpass[1, j] > 0.0:
+            state[0, j], state[1, j] = new_state[0, j], new_state[1, j]
+        slot_of[j] = slot_of[j] + 1 if slot_of[j] + 1 < n_seg[j] else 0
 
 
 @njit(cache=True, inline="always")
@@ -131,8 +144,8 @@ def _junctions(buf, off, n_seg, z, c, rel, slot_of, a_in, b_in, top_speed, botto
 
 
 @njit(cache=True)
-def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, ttau, tstate, az, an, af, ac,
-            ar, aoff, abuf, atau, astate, scratch, slots, n_steps, out, out_every, out_row):
+def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, az, an, af, ac,
+            ar, aoff, abuf, alp, astate, scratch, slots, n_steps, out, out_every, out_row):
     """Advance ``n_steps`` steps; rows every ``out_every`` steps (the lumped kernel's columns,
     then O_T_BOTTOM.. if ``out`` has them); return the next free row. A step that would turn
     the bit more than a sector is refused (K_REFUSED = 1), as in the lumped kernel."""
@@ -147,6 +160,11 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, ttau, tstate,
     zt_b, za_b = tz[mt - 1] + tc[mt - 1], az[ma - 1] + ac[ma - 1]
     ta_in, tb_in, aa_in, ab_in = scratch[0], scratch[1], scratch[2], scratch[3]
     tslot, aslot = slots[0], slots[1]
+    t_next, a_next = scratch[6:8], scratch[8:10]     # the low-passes' states after a step
+    for j in range(mt):                    # the slot each segment reads next: steps mod (N + 1)
+        tslot[j] = k[kn.K_STEPS] % tn[j]
+    for j in range(ma):
+        aslot[j] = k[kn.K_STEPS] % an[j]
     k[kn.K_REFUSED] = 0
     (tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g, sum_w, sum_t, k_last,
      regime, a_om_min, a_om_max, a) = kn._load(x, k, acc)
@@ -172,10 +190,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, ttau, tstate,
     if not drive:
         om_td = om0
     for _ in range(n_steps):
-        lr, dr = _arrivals(tbuf, toff, tn, tf, tz, tslot, steps, ta_in, tb_in, ttau, tstate, h)
-        la, da = _arrivals(abuf, aoff, an, af, az, aslot, steps, aa_in, ab_in, atau, astate, h)
-        damp_r += h * dr
-        damp_a += h * da
+        lr, dr = _arrivals(tbuf, toff, tn, tf, tz, tslot, ta_in, tb_in, tlp, tstate, t_next)
+        la, da = _arrivals(abuf, aoff, an, af, az, aslot, aa_in, ab_in, alp, astate, a_next)
         a_t, a_a = ta_in[mt - 1], aa_in[ma - 1]
         rate = (a_t - a_prev) / h          # the bottom torque's rate while the bit is held
         # the top: speed imposed or the drive's inertia under its motor torque; hook force w0
@@ -242,6 +258,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, ttau, tstate,
         if refused:
             k[kn.K_REFUSED] = 1
             break
+        damp_r += h * dr
+        damp_a += h * da
         # the string: reflections at the BHA, junctions, the top
         damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top,
                                  om_int / h, scratch[4], scratch[5])
@@ -264,6 +282,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, ttau, tstate,
             a_tm += h * ts_top
             a_wm += h * ts_top * om0
         a_prev = a_t
+        _keep(tn, tlp, tstate, t_next, tslot)
+        _keep(an, alp, astate, a_next, aslot)
         steps += 1
         if out_row < rows and steps % out_every == 0:
             o = out[out_row]

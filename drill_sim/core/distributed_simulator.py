@@ -35,6 +35,11 @@ class _Line:
         self.rel = np.ascontiguousarray(line.relative, dtype=np.float64)
         self.tau = np.ascontiguousarray(line.tau, dtype=np.float64)
         self.state = np.zeros((2, self.z.size))
+        # the low-passes' trapezoidal step y+ = keep y + gain x, r = h/(2 tau); gain 0: none
+        with np.errstate(divide="ignore"):
+            r = np.where(self.tau > 0.0, 0.5 * line.h / np.where(self.tau > 0.0, self.tau, 1.0),
+                         0.0)
+        self.lowpass = np.ascontiguousarray(np.vstack([(1.0 - r) / (1.0 + r), 2.0 * r / (1.0 + r)]))
         self.off = np.concatenate([[0], np.cumsum(2 * self.n)[:-1]]).astype(np.int64)
         self.buf = np.zeros(int(2 * self.n.sum()))
 
@@ -77,7 +82,7 @@ class StringSimulator(Simulator):
         self.waves = waves
         self._t, self._a = _Line(waves.torsion), _Line(waves.axial)
         m = max(self._t.n.size, self._a.n.size)
-        self._scratch = np.zeros((6, m))
+        self._scratch = np.zeros((10, m))
         self._slots = np.zeros((2, m), dtype=np.int64)
         super().__init__(groups, waves.h, stick_window=stick_window,
                          hoist_speed_limit=hoist_speed_limit, nodes=nodes, drive=drive)
@@ -163,8 +168,9 @@ class StringSimulator(Simulator):
     def advance_into(self, n_steps: int, out: np.ndarray, every: int, row: int) -> int:
         t, a = self._t, self._a
         row = int(dk.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
-                             t.z, t.n, t.f, t.c, t.rel, t.off, t.buf, t.tau, t.state, a.z, a.n,
-                             a.f, a.c, a.rel, a.off, a.buf, a.tau, a.state, self._scratch,
+                             t.z, t.n, t.f, t.c, t.rel, t.off, t.buf, t.lowpass, t.state, a.z,
+                             a.n, a.f, a.c, a.rel, a.off, a.buf, a.lowpass, a.state,
+                             self._scratch,
                              self._slots, n_steps, out, every, row))
         if self._k[kn.K_REFUSED]:
             self._refuse_step()

@@ -89,7 +89,8 @@ class RigNode(Node):
             pace = "real-time factor " + ("max" if session.pacer.max_speed
                                           else f"{p['real_time_factor']:g}")
         self.get_logger().info(
-            f"rig '{self.preset.name}' ready: t* = {session.rig.scales.time_s:.3f} s, "
+            f"rig '{self.preset.name}' ready: {p['string_model']} string, "
+            f"t* = {session.rig.scales.time_s:.3f} s, "
             f"dt = {session.rig.dt_s:.4g} s ({session.steps_per_tick} a tick), "
             f"{p['rate_hz']:g} Hz, {pace}, "
             f"{'publishing /clock' if session.with_clock else 'wall-clock stamps'}, sensors "

@@ -85,7 +85,9 @@ def test_unknown_scenario_set_is_refused(capsys):
 
 def test_main_job_switches_the_scenarios_controller_on_and_compares(tmp_path):
     """A scenario with a controller section: the rig starts on its own speed loop, the driver
-    switches drill_sim_controller on at on_at_s, the summary compares before and after."""
+    switches drill_sim_controller on at on_at_s, the summary compares before and after; here
+    on the distributed string (``--string-model``: the rig's model, which the node says, and
+    the controller's tuning for it)."""
     from rosutil import isolate
     isolate()
     scenario = tmp_path / "on.yaml"
@@ -93,9 +95,12 @@ def test_main_job_switches_the_scenarios_controller_on_and_compares(tmp_path):
                         "duration_s: 7.0\npoints:\n  - {at_s: 0.0, rpm: 60.0, wob_kn: 100.0}\n"
                         "controller: {law: z_torque, on_at_s: 2.5}\n")
     proc = subprocess.run([installed("drill_sim"), "run", "--scenario", str(scenario),
-                           "--no-record", "--plot", str(tmp_path / "on.png")],
+                           "--no-record", "--plot", str(tmp_path / "on.png"),
+                           "--string-model", "distributed"],
                           capture_output=True, text=True, timeout=180, cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "rig 'base' ready: distributed string" in proc.stderr
+    assert "on preset 'base' (distributed string)" in proc.stdout
     assert "controller z_torque switched on at" in proc.stderr + proc.stdout   # the driver
     assert "controller z_torque switched on at 2.5 s: SSI" in proc.stdout       # the summary
     assert "stick-slip: no stick-slip before the switch" in proc.stdout
@@ -132,3 +137,21 @@ def test_the_start_perturbation_is_one_option_and_an_offline_run_writes_an_exact
     result = json.loads(done.stdout)
     assert result["exact"] is True and result["samples"] == 4001
     assert result["commands"] >= 4000 and result["refused"] == 0
+
+
+def test_the_main_jobs_controller_is_tuned_for_the_rigs_string_model():
+    """``drill_sim run``'s controller gets the reference gains of the string the rig runs:
+    the distributed string's f1 (0.57 Hz on base) is not the lumped one's (0.76 Hz)."""
+    from drill_sim.cli.run import controller_command
+    from drill_sim.control.reference import reference_gains
+    from drill_sim.core import load_preset
+    preset = load_preset("base")
+    j_td = preset.top_drive.top_drive_inertia_kg_m2
+    for model in ("lumped", "distributed"):
+        cmd = controller_command(preset, "soft_speed", model)
+        given = {a.split(":=")[0]: a.split(":=")[1] for a in cmd if ":=" in a}
+        for name, value in reference_gains("soft_speed", preset, j_td,
+                                           string_model=model).items():
+            assert float(given[f"soft_speed.{name}"]) == value, (model, name)
+    lumped = controller_command(preset, "soft_speed", "lumped")
+    assert lumped != controller_command(preset, "soft_speed", "distributed")
