@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 from ..core import DEFAULT_DT, NoSteadyDrilling, steady_state
 from ..core.distributed import STRING_MODELS, geometry_waves
 from ..core.parameters import ParameterError
-from ..core.simulator import max_step, resolves
+from ..core.resolution import max_step, resolves
 from ..core.top_drive import MODES, TopDriveParameters
 from ..session.parameter_table import PERTURBATION_RANGE
 from ..study.single import RunSettings, default_start

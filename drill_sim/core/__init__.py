@@ -15,7 +15,8 @@ if TYPE_CHECKING:
     from .metrics import Metrics
     from .parameters import Groups, ParameterError, RigParameters, Scales
     from .presets import Preset, load_preset, preset_names
-    from .rig import RPM, Rig, RigSample
+    from .rig import Rig
+    from .rig_sample import RPM, RigSample
     from .simulator import DEFAULT_DT, Simulator, StateView, Trajectory
     from .stability import NoSteadyDrilling, StabilityResult, SteadyState, steady_state
     from .string_geometry import StringGeometry, StringSection
@@ -27,7 +28,8 @@ _HOMES = {
     "parameters": ("Groups", "ParameterError", "RigParameters", "Scales"),
     "string_geometry": ("StringGeometry", "StringSection"),
     "presets": ("Preset", "load_preset", "preset_names"),
-    "rig": ("RPM", "Rig", "RigSample"),
+    "rig": ("Rig",),
+    "rig_sample": ("RPM", "RigSample"),
     "simulator": ("DEFAULT_DT", "Simulator", "StateView", "Trajectory"),
     "stability": ("NoSteadyDrilling", "StabilityResult", "SteadyState", "steady_state"),
     "top_drive": ("DriveGroups", "TopDriveParameters"),

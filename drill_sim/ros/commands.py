@@ -24,7 +24,7 @@ from rclpy.node import Node
 from rclpy.type_support import check_is_valid_msg_type
 
 from ..wire import WireError, rig_topics
-from ..wire.cdr import JointCommand, command_decoder
+from ..wire.cdr_decode import JointCommand, command_decoder
 from ..wire.rig_topics import RigTopic
 from .topics import message_class, rclpy_qos
 

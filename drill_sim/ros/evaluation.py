@@ -35,7 +35,7 @@ from ..control.evaluation import LoopSettings, Scenario, law_top_drive
 from ..control.tuning import pipe_impedance
 from ..core import Preset
 from ..core.parameters import ParameterError
-from ..core.rig import REGIME_STUCK
+from ..core.rig_sample import REGIME_STUCK
 from ..programs import program
 from ..session.parameter_table import specs
 from ..wire.rig_topics import JOINT_PLACES, topic

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..core.rig import RigSample
+from ..core.rig_sample import RigSample
 from .lockstep import LockstepStatus
 from .pacing import CATCH_UP_TICKS, TickStats, each_sampled
 

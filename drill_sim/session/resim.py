@@ -28,7 +28,7 @@ from ..bag.series import JOINT_ARRAY_START, JOINT_FIELDS, JOINT_VALUES_F64, join
 from ..core import NoSteadyDrilling, ParameterError
 from ..core.sensor_profile import profile_from_dict
 from ..core.sensors import Measured
-from ..wire import cdr, rig_topics
+from ..wire import cdr, cdr_decode, rig_topics
 from . import rules
 from .rig_session import RigSession
 
@@ -174,7 +174,7 @@ class _Rerun:
     def motor(self, data: bytes) -> None:
         """A recorded motor torque (published after the tick's joint_states, at its step)."""
         sim_time_s = self._advance(data)
-        torque_nm = cdr.decode_stamped_vectors(data)[3][5]
+        torque_nm = cdr_decode.decode_stamped_vectors(data)[3][5]
         self._compare(MOTOR_TORQUE, self.rig.motor_torque_nm, torque_nm, sim_time_s)
 
     def measured(self, t: rig_topics.RigTopic, data: bytes) -> None:
@@ -197,7 +197,7 @@ class _Rerun:
 
     def command(self, topic: rig_topics.RigTopic, data: bytes) -> None:
         """A recorded command, accepted or refused by the session's own rule."""
-        frame, _, _, six = cdr.decode_command(topic.type_name, data)
+        frame, _, _, six = cdr_decode.decode_command(topic.type_name, data)
         if self.session.commands.command(topic, frame, six) is None:
             self.result.commands += 1
         else:
@@ -220,7 +220,7 @@ def _measured_values(t: rig_topics.RigTopic, data: bytes) -> dict[str, float]:
     """The float64 fields of a recorded ~/measured/ message by path ({} if undecodable)."""
     try:
         if t.type_name in cdr.VECTOR_FIELDS:
-            six = cdr.decode_stamped_vectors(data)[3]
+            six = cdr_decode.decode_stamped_vectors(data)[3]
             return dict(zip(cdr.VECTOR_FIELDS[t.type_name], six, strict=True))
         return {"data": struct.unpack_from("<d", data, 4)[0]}
     except (cdr.WireError, struct.error):

@@ -13,7 +13,7 @@ from ..core.sensor_profile import CHANNELS
 from ..wire import cdr, rig_topics
 
 if TYPE_CHECKING:
-    from ..core.rig import RigSample
+    from ..core.rig_sample import RigSample
     from ..core.sensors import Measured, SensorBank
     from .recorder import SessionRecorder
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from ..core import NoSteadyDrilling, ParameterError
 from ..core.figures import figures_line
-from ..core.rig import RigSample
+from ..core.rig_sample import RigSample
 from ..core.sensor_profile import SensorProfile
 from ..core.sensors import Measured, session_sensors
 from ..core.string_geometry import StringGeometry

@@ -22,7 +22,7 @@ RIG_FIELDS = tuple(f.name for f in fields(RigParameters))
 TOP_DRIVE_FIELDS = tuple(f.name for f in fields(TopDriveParameters))
 
 if TYPE_CHECKING:
-    from ..wire.cdr import JointCommand
+    from ..wire.cdr_decode import JointCommand
 
 
 def rig_parameters(values: dict[str, object]) -> RigParameters:

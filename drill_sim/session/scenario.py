@@ -30,7 +30,7 @@ import numpy as np
 
 from ..core.parameters import ParameterError, check_number
 from ..core.resources import read_yaml, shipped_names
-from ..core.rig import RPM
+from ..core.rig_sample import RPM
 
 _KEYS = {"at_s", "rpm", "top_drive_speed_rad_s", "wob_kn", "hook_load_kn", "ramp"}
 _TOP_KEYS = {"description", "initial_state", "duration_s", "points", "controller", "changes",

@@ -12,7 +12,7 @@ import struct
 from collections.abc import Sequence
 from typing import Any
 
-from ..wire import WireError, cdr, rig_topics
+from ..wire import WireError, cdr, cdr_decode, rig_topics
 from . import rules
 
 # a command for the top-drive mode the drive left this recently [s] was in flight at the switch
@@ -67,7 +67,7 @@ class SessionCommands:
         """A command message's CDR bytes as they arrived on ``topic``: decoded, then
         ``command``. Bytes that do not decode are refused as such (and not recorded)."""
         try:
-            frame_id, sec, nanosec, six = cdr.decode_command(topic.type_name, data)
+            frame_id, sec, nanosec, six = cdr_decode.decode_command(topic.type_name, data)
         except (WireError, struct.error) as exc:
             return f"{topic.name} message", f"{len(data)} bytes", f"a CDR message ({exc})"
         return self.command(topic, frame_id, six, data, (sec, nanosec))

@@ -209,14 +209,14 @@ def test_a_kinematic_loop_is_the_rig_commanded_by_hand_and_its_bag_holds_each_co
 def _commands_in_bag(path, rules: tuple[str, ...]) -> dict[str, list]:
     """(stamp [s], the six components) of each command a bag holds, by the node's rule."""
     from drill_sim.bag.bag import opened
-    from drill_sim.wire import cdr, rig_topics
+    from drill_sim.wire import cdr_decode, rig_topics
     sent = {rule: [] for rule in rules}
     with opened(path) as bag:
         for m in bag.messages():
             for rule in sent:
                 topic = rig_topics.COMMAND_BY_RULE[rule]
                 if m.topic == topic.under("/" + rig_topics.NODE_NAME):
-                    _, sec, nsec, six = cdr.decode_command(topic.type_name, m.data)
+                    _, sec, nsec, six = cdr_decode.decode_command(topic.type_name, m.data)
                     sent[rule].append((sec + nsec * 1e-9, six))
     return sent
 

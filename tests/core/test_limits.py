@@ -10,7 +10,7 @@ from dataclasses import replace
 import pytest
 
 from drill_sim.core import Groups, ParameterError, Rig, Simulator
-from drill_sim.core.simulator import max_step
+from drill_sim.core.resolution import max_step
 from drill_sim.core.stability import stability
 
 STIFF = Groups(4, 1e4, 6.84, 0.36)          # axial period 2 pi/sqrt(4e4) = 0.031 t*

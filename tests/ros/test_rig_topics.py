@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from drill_sim.core import RPM, Rig, RigSample, load_preset
-from drill_sim.core.rig import REGIME_NAMES
+from drill_sim.core.rig_sample import REGIME_NAMES
 from drill_sim.core.sensors import Measured, exact_measured
 from drill_sim.session import rules
 from drill_sim.session.rig_messages import RigEncoders

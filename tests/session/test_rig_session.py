@@ -15,7 +15,7 @@ from drill_sim.session.parameter_table import specs
 from drill_sim.session.resim import resimulate
 from drill_sim.session.rig_session import RigSession
 from drill_sim.session.session_commands import IN_FLIGHT_S
-from drill_sim.wire import cdr, rig_topics
+from drill_sim.wire import cdr, cdr_decode, rig_topics
 
 SPEED = rig_topics.topic("~/cmd/top_drive")
 HOOK = rig_topics.topic("~/cmd/hook_load")
@@ -152,8 +152,8 @@ def test_measured_on_sample_sends_a_measured_topic_only_when_fresh(base):
         k = [t.name for t in s.outputs].index("~/measured/top_drive/twist")
         for _ in range(100):
             s.tick(out.send)
-        stamps = [cdr.decode_stamped_vectors(raw)[1] * 10**9
-                  + cdr.decode_stamped_vectors(raw)[2] for raw in out.got[k]]
+        stamps = [cdr_decode.decode_stamped_vectors(raw)[1] * 10**9
+                  + cdr_decode.decode_stamped_vectors(raw)[2] for raw in out.got[k]]
         assert len(stamps) >= 100_000_000 // period_ns - 1, mode
         assert {b - a for a, b in itertools.pairwise(stamps)} == {period_ns}, mode
         assert len(out.got[0]) == 100                        # exact outputs: every tick

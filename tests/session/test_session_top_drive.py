@@ -11,7 +11,7 @@ import pytest
 from drill_sim.core import ParameterError, load_preset
 from drill_sim.session import rules
 from drill_sim.session.parameter_table import specs
-from drill_sim.wire.cdr import JointCommand
+from drill_sim.wire.cdr_decode import JointCommand
 
 
 def _params(**changes) -> dict[str, object]:

@@ -10,7 +10,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64, String
 
-from drill_sim.wire import cdr
+from drill_sim.wire import cdr, cdr_decode
 
 VALUES = [(0.0, -0.0, 1.5, -3.25e7, 1e-300, 123.456), (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)]
 
@@ -113,7 +113,7 @@ def test_wire_errors_name_what_does_not_fit():
     with pytest.raises(WireError, match="UTF-8"):
         cdr.string("\ud800")
     with pytest.raises(WireError, match="cannot hold"):
-        cdr.decode_stamped_vectors(cdr.stamped_vectors("top_drive")(1, 2, VALUES[1])[:30])
+        cdr_decode.decode_stamped_vectors(cdr.stamped_vectors("top_drive")(1, 2, VALUES[1])[:30])
 
 
 @pytest.mark.parametrize("frame", ["", "top_drive", "é"])
@@ -123,4 +123,4 @@ def test_decode_stamped_vectors_reads_what_rclpy_writes(frame):
     t.header.stamp.sec, t.header.stamp.nanosec = -5, 7
     (t.twist.linear.x, t.twist.linear.y, t.twist.linear.z,
      t.twist.angular.x, t.twist.angular.y, t.twist.angular.z) = VALUES[0]
-    assert cdr.decode_stamped_vectors(serialize_message(t)) == (frame, -5, 7, VALUES[0])
+    assert cdr_decode.decode_stamped_vectors(serialize_message(t)) == (frame, -5, 7, VALUES[0])

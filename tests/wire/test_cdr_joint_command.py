@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from drill_sim.wire import WireError
-from drill_sim.wire.cdr import JointCommand, decode_command, decode_joint_state
+from drill_sim.wire.cdr_decode import JointCommand, decode_command, decode_joint_state
 
 
 def test_joint_state_bytes_decode_as_rclpy_serializes_them():

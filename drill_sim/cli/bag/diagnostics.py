@@ -18,7 +18,7 @@ from pathlib import Path
 from ...bag.bag import Bag
 from ...session.diagnostics import ERROR, OK, WARN
 from ...wire import WireError, rig_topics
-from ...wire.cdr import decode_diagnostic_array
+from ...wire.cdr_decode import decode_diagnostic_array
 from ..errors import UsageError
 
 HELP = "the /diagnostics a bag recorded: level, message and chosen values over time"
