@@ -1,13 +1,31 @@
-"""YAML files shipped in a package folder (presets, scenarios), or given by path."""
+"""YAML files shipped in a package folder (presets, scenarios, sensor profiles), or given by
+path: one loader for all of them."""
 
 from __future__ import annotations
 
+import re
 from importlib import resources
 from pathlib import Path
 
 import yaml
 
 from .parameters import ParameterError
+
+
+class NumberLoader(yaml.SafeLoader):
+    """The safe loader, with numbers as YAML 1.2 reads them: ``1e9`` and ``6e7`` are floats
+    (YAML 1.1 wants a dot, ``1.0e9``, and reads ``1e9`` as the string '1e9'), so a preset, a
+    scenario and a sensor profile take the same numbers."""
+
+
+NumberLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"), list("-+0123456789"))
+
+
+def load_yaml(text: str) -> object:
+    """``text`` parsed by ``NumberLoader`` (yaml.YAMLError if it is not YAML)."""
+    return yaml.load(text, Loader=NumberLoader)     # a SafeLoader: no arbitrary objects
 
 
 def shipped_names(folder: str) -> list[str]:
@@ -38,6 +56,6 @@ def read_yaml(kind: str, folder: str, name_or_path: str | Path) -> tuple[str, ob
             raise ParameterError(f"{kind} {text_name!r} cannot be read: {exc.strerror}; "
                                  "expected a readable YAML file") from None
     try:
-        return name, yaml.safe_load(text)
+        return name, load_yaml(text)
     except yaml.YAMLError as exc:
         raise ParameterError(f"{kind} {text_name!r} is not valid YAML: {exc}") from None

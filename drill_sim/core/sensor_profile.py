@@ -140,7 +140,8 @@ def _channel(where: str, channel: str, data: object) -> ChannelSpec:
             continue
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
                 or not math.isfinite(value):
-            raise ParameterError(f"{where}: {key} = {value!r}: expected a finite number")
+            raise ParameterError(f"{where}: {key} = {value!r}: expected a finite number, written "
+                                 "as a YAML number (e.g. 1e9, 1.0e9 or 0.5; not quoted)")
         positive = key in ("rate_hz", "window_s")
         if key != "bias" and (value < 0 or (positive and value == 0)):
             raise ParameterError(f"{where}: {key} = {value!r}: expected a "
