@@ -61,9 +61,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rpm", type=number, help="one steady point instead of the set: "
                         f"top-drive speed set-point [rpm], > 0 to {RPM_MAX:g} (with --wob-kn)")
     parser.add_argument("--wob-kn", type=number, help="its available weight on bit W0 [kN]")
-    parser.add_argument("--scenarios", default="standard",
-                        help=f"comma-separated scenario sets: standard (all), {', '.join(SETS)}; "
-                             "or a rig scenario (shipped name or YAML, msg_docs/driver.md)")
+    parser.add_argument("--scenarios", default=None,
+                        help=f"comma-separated scenario sets: standard (all, the default), "
+                             f"{', '.join(SETS)}; or a rig scenario (shipped name or YAML, "
+                             "msg_docs/driver.md); not with --rpm/--wob-kn")
     parser.add_argument("--laws", default=",".join(DEFAULT_LAWS),
                         help=f"comma-separated laws ({', '.join(LAWS)}); default "
                              f"{','.join(DEFAULT_LAWS)}")
@@ -228,7 +229,11 @@ def _scenarios(args: argparse.Namespace) -> list[Scenario]:
             if getattr(args, option) is not None:
                 raise UsageError(f"--{option.replace('_', '-')} applies to --rpm/--wob-kn only; "
                                  "the scenario sets have their own times")
-        return named([s.strip() for s in args.scenarios.split(",") if s.strip()])
+        text = "standard" if args.scenarios is None else args.scenarios
+        return named([s.strip() for s in text.split(",") if s.strip()])
+    if args.scenarios is not None:
+        raise UsageError(f"--scenarios {args.scenarios} with --rpm/--wob-kn: they contradict each "
+                         "other (one steady point, or the scenario sets); expected one of them")
     rpm = in_range("--rpm", args.rpm, 0.0, RPM_MAX, unit="rpm", low_open=True)
     wob = in_range("--wob-kn", args.wob_kn, 0.0, 1e4, unit="kN", low_open=True)
     duration = in_range("--duration", 60.0 if args.duration is None else args.duration,

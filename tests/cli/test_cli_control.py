@@ -83,6 +83,15 @@ def test_unknown_scenario_set_is_refused(capsys):
     assert "nope" in capsys.readouterr().err
 
 
+def test_scenarios_with_one_steady_point_is_refused_not_ignored(capsys):
+    """--scenarios and --rpm/--wob-kn contradict each other: one line, exit 2 (it used to
+    run the steady point and drop --scenarios without a word)."""
+    assert main(["control", "--rpm", "60", "--wob-kn", "100", "--scenarios", "bogus"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1
+    assert "--scenarios bogus with --rpm/--wob-kn" in err
+
+
 def test_main_job_switches_the_scenarios_controller_on_and_compares(tmp_path):
     """A scenario with a controller section: the rig starts on its own speed loop, the driver
     switches drill_sim_controller on at on_at_s, the summary compares before and after; here
