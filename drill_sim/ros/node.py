@@ -134,13 +134,15 @@ class RigNode(Node):
         self.session.set_live([p.get_subscription_count() > 0 for p in self._outputs])
 
     def lockstep_overdue(self, now: float) -> None:
-        """The tick waited ``lockstep_timeout_s``: say for what, and publish it again (not
-        recorded again) so a controller that started or restarted late can answer it."""
+        """The tick waited ``lockstep_timeout_s``: say for what (at most once a second), and
+        publish it again (not recorded again) so a controller that started or restarted late
+        can answer it."""
         st = self.session.lockstep.status(now)
         self.get_logger().warning(
             f"lockstep: waiting {st.waiting_s:.1f} s for a command stamped "
             f"{st.stamp_ns * 1e-9:.6f} s on {', '.join(st.missing)}; publishing that tick "
-            "again and waiting on (the rig never advances without its controller)")
+            "again and waiting on (the rig never advances without its controller)",
+            throttle_duration_sec=1.0)             # said once a second, however short the timeout
         self.session.emit_again(self.send)     # to every output: subscribers may be new
 
     # ---- commands ----------------------------------------------------------------------
