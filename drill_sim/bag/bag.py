@@ -20,7 +20,7 @@ from pathlib import Path
 
 from .bag_info import BagInfo, TopicInfo, count_by_walking, count_from_summary
 from .errors import BagError
-from .mcap_scan import MappedFile, McapScan, what_it_is
+from .mcap_scan import MAGIC, MappedFile, McapScan, what_it_is
 from .mcap_summary import FileSummary
 from .metadata import read_metadata_yaml
 from .verify import damage
@@ -67,7 +67,17 @@ class Bag:
         exist, each once, else the ``*.mcap`` present, by index); none is opened yet."""
         path = Path(path)
         if path.is_file():
+            try:
+                with path.open("rb") as f:
+                    head = f.read(len(MAGIC))
+            except OSError as exc:
+                raise BagError(f"{path}: cannot be read ({exc.strerror})") from None
+            if head != MAGIC:                  # every tool says the same of a file that is not
+                raise BagError(f"{path}: not an MCAP file ({what_it_is(memoryview(head))})")
             return cls(path, [path], None)
+        if path.exists() and not path.is_dir():
+            raise BagError(f"bag {path}: not a file or a folder (a device, a pipe or a socket); "
+                           "expected an MCAP file or a bag folder")
         if not path.is_dir():
             raise BagError(f"bag {path}: no such file or directory")
         meta = read_metadata_yaml(path)

@@ -27,6 +27,7 @@ from .errors import UsageError
 from .plot import plot_rig_series
 
 STATUS_WINDOW_S = 1.0          # the stretch of samples the status line names the regime of
+STUCK_AT_ALL = 0.01            # a bit stuck less than this share of the time has no stick-slip
 COMPARE_WINDOW_S = 10.0        # before/after a controller is switched on: the last ... of each
 
 MAX_DURATION_S = 1e6     # --duration [s] (documented in msg_docs/cli.md, "Limits")
@@ -169,10 +170,14 @@ def _before_after(series: RigSeries, law: str, on_s: float) -> str:
           f"{after['stick_fraction']:.2f}, ROP {before['mean_rop_m_s'] * 3600:.1f} -> "
           f"{after['mean_rop_m_s'] * 3600:.1f} m/h (the {before['duration_s']:.0f} s before, "
           f"the last {after['duration_s']:.0f} s)")
-    if before["stick_fraction"] == 0.0:
-        verdict = "no stick-slip before the switch"
+    stuck_before, stuck_after = before["stick_fraction"], after["stick_fraction"]
+    if stuck_before < STUCK_AT_ALL:
+        verdict = (f"no stick-slip before the switch (stuck {100 * stuck_before:.1f} % of the "
+                   "time)")
+    elif stuck_after < STUCK_AT_ALL:
+        verdict = f"cleared (stuck {100 * stuck_after:.1f} % of the time after)"
     else:
-        verdict = "cleared" if after["stick_fraction"] == 0.0 else "not cleared"
+        verdict = f"not cleared (stuck {100 * stuck_after:.1f} % of the time after)"
     print(f"  stick-slip: {verdict}")
     return f"{before['ssi']:.2f} → {after['ssi']:.2f}"
 

@@ -37,3 +37,21 @@ def figures_line(params: RigParameters) -> str:
             f"L* {f['length_scale_m'] * 1e3:.2f} mm, wear-flat weight "
             f"{f['friction_weight_n'] / 1e3:.0f} kN; n {f['n']:.0f}, psi {f['psi']:.3g}, "
             f"lambda {f['lambda']:.3g}, beta {f['beta']:.3g}")
+
+
+def string_first_mode(rig) -> str:
+    """The distributed string's first torsional mode off bottom, top held, damped (exact pipe:
+    ``stability_distributed.string_modes``), in words: "first torsional mode 0.555 Hz
+    (damping ratio 4.9 %)"."""
+    from .distributed import geometry_waves
+    from .simulator import DEFAULT_DT
+    from .stability_distributed import string_modes
+    from .top_drive import DriveGroups
+    params = rig.params
+    waves = geometry_waves(params, rig.geometry, DEFAULT_DT, continuous=True)
+    modes = string_modes(waves, params.groups.psi, DriveGroups(), count=1)
+    if not modes.torsional:
+        return "first torsional mode not found"
+    m = modes.torsional[0]
+    return (f"first torsional mode {m.frequency / (2.0 * math.pi * params.scales.time_s):.3f} "
+            f"Hz (damping ratio {100 * m.damping_ratio:.1f} %)")

@@ -113,8 +113,10 @@ def string_from_dict(name: str, string: object) -> StringGeometry:
     sections = given.pop("sections", None)
     if sections is not None:
         if not isinstance(sections, list) or not sections:
-            raise ParameterError(f"preset {name!r}: string.sections must be a list of "
-                                 "sections (mappings), top first")
+            got = "an empty list" if sections == [] else f"{type(sections).__name__}"
+            raise ParameterError(f"preset {name!r}: string.sections is {got}: expected a "
+                                 "list of at least two sections (mappings: the pipe's, then "
+                                 "the BHA's), top first")
         parts = []
         for i, section in enumerate(sections):
             where = f"string.sections[{i}]"

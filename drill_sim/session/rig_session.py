@@ -18,7 +18,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from ..core import NoSteadyDrilling, ParameterError
-from ..core.figures import figures_line
+from ..core.figures import figures_line, string_first_mode
 from ..core.rig_sample import RigSample
 from ..core.sensor_profile import SensorProfile
 from ..core.sensors import Measured, session_sensors
@@ -116,8 +116,12 @@ class RigSession:
         return self._steps_per_tick
 
     def figures(self) -> str:
-        """The rig's key figures in one line."""
-        return figures_line(self.rig.params)
+        """The rig's key figures in one line (the torsional frequency is the lumped model's;
+        on the distributed string its own first mode is added)."""
+        line = figures_line(self.rig.params)
+        if self.rig.string_model == "distributed" and self.rig.geometry is not None:
+            line += f"; the distributed string's {string_first_mode(self.rig)}"
+        return line
 
     # ---- time ----------------------------------------------------------------------
     @property

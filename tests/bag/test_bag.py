@@ -4,6 +4,7 @@ and foreign input."""
 from __future__ import annotations
 
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -307,3 +308,24 @@ def test_rig_series_through_the_indexes_equals_the_samples_and_survives_a_cut(tm
         n = cut.time_s.size
         assert 0 < n < 3000            # how many: by the outputs a tick has (chunk size)
         assert np.array_equal(cut.wob_n, [s.wob_n for s in samples[:n]])
+
+
+@pytest.mark.parametrize("tool", ["info", "metrics", "export", "plot", "diagnostics"])
+def test_every_tool_says_the_same_of_a_path_that_is_no_bag(tmp_path, tool, capsys):
+    """A text file, an empty file and a device: one line, exit 2, the same words from every
+    bag tool (``metrics`` said "no JointState topic" of a text file, and every tool said
+    "no such file" of /dev/null)."""
+    from drill_sim.cli.main import main
+    text = tmp_path / "notes.txt"
+    text.write_text("not a bag\n")
+    empty = tmp_path / "empty.mcap"
+    empty.write_bytes(b"")
+    extra = ["--out", str(tmp_path / "out.csv")] if tool in ("export", "plot") else []
+    if tool == "plot":
+        extra = ["--out", str(tmp_path / "out.png")]
+    for path, words in ((text, "not an MCAP file (it does not start with the MCAP magic"),
+                        (empty, "not an MCAP file (an empty file)"),
+                        (Path("/dev/null"), "not a file or a folder")):
+        assert main(["bag", tool, str(path), *extra]) == 2, (tool, path)
+        err = capsys.readouterr().err
+        assert words in err and len(err.strip().splitlines()) == 1, (tool, path, err)

@@ -146,7 +146,8 @@ def test_two_section_keys_are_a_shorthand_for_two_sections():
 @pytest.mark.parametrize("change, words", [
     ({"sections": [SECTIONS[2], SECTIONS[0]]}, "pipe's sections first"),
     ({"sections": SECTIONS[:2]}, "at least one) after them"),
-    ({"sections": []}, "must be a list of sections"),
+    ({"sections": []}, "string.sections is an empty list: expected a list of at least two"),
+    ({"sections": {"length_m": 1.0}}, "string.sections is dict: expected a list"),
     ({"sections": [{**SECTIONS[0], "od_m": -1.0}, SECTIONS[2]]}, "string.sections[0]: od_m"),
     ({"sections": [{**SECTIONS[0], "id_m": 0.2}, SECTIONS[2]]}, "id_m = 0.2"),
     ({"sections": [{**SECTIONS[0], "bha": "yes"}, SECTIONS[2]]}, "bha = 'yes'"),

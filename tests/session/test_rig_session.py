@@ -222,3 +222,12 @@ def test_resimulation_notices_a_session_that_differs(base, tmp_path):
     finally:
         resim._Rerun.command = real
     assert not result.exact and result.max_difference["top_drive_speed_rad_s"] > 0.1
+
+
+def test_the_figures_line_names_the_distributed_strings_own_first_mode(base):
+    """The lumped model's torsional frequency is not the distributed string's: on it the line
+    adds the pipe's own first mode (base: 0.555 Hz, the exact damped pipe's, top held)."""
+    lumped = RigSession(params(base)).figures()
+    assert "torsional 0.756 Hz" in lumped and "distributed" not in lumped
+    line = RigSession(params(base, string_model="distributed"), geometry=base.string).figures()
+    assert "the distributed string's first torsional mode 0.555 Hz (damping ratio 4.9 %)" in line
