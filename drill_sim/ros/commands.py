@@ -60,6 +60,7 @@ class CommandInbox:
             self._subs.append((t, handle, cls))
         self.limit = limit or max(t.qos_for(reliability).depth for t in rig_topics.COMMANDS)
         self.received = self.lost = self.undecodable = 0
+        self.last_undecodable = ""              # why the last one was: "topic: reason"
         self._last_sequence: dict[str, int] = {}
         self._context = node.context.handle
         self._watched = [h for _, h, _ in self._subs]
@@ -104,8 +105,9 @@ class CommandInbox:
                     self._count_gap(t.name, sequence)
                 try:
                     frame_id, sec, nanosec, six = decode(data)
-                except WireError:
+                except WireError as exc:
                     self.undecodable += 1
+                    self.last_undecodable = f"{t.name}: {exc}"
                     continue
                 out.append(Command(t, data, frame_id, sec, nanosec, six))
         return out

@@ -154,7 +154,8 @@ class RigNode(Node):
         if self.commands.undecodable != self._undecodable:
             self._undecodable = self.commands.undecodable
             self.get_logger().warning(f"{self._undecodable} command messages could not be "
-                                      "decoded (not little-endian CDR?) and were ignored",
+                                      "decoded and were ignored; the last, on "
+                                      f"{self.commands.last_undecodable}",
                                       throttle_duration_sec=1.0)
         if not batch:
             return

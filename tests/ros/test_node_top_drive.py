@@ -141,7 +141,8 @@ def test_torque_mode_applies_the_command_through_limit_and_lag_and_resim_is_exac
 
 def test_kinematic_mode_refuses_torque_and_follows_joint_velocity_then_switches(ros):
     """In kinematic mode a torque command is refused naming the mode, a JointState velocity is
-    the speed set-point, malformed JointStates are refused whole; a run-time switch to torque
+    the speed set-point, malformed JointStates are refused whole (one of 70 names, not a command,
+    with its reason); a run-time switch to torque
     mode is bumpless and then the torque command is taken."""
     from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
     from rcl_interfaces.srv import SetParameters
@@ -159,6 +160,7 @@ def test_kinematic_mode_refuses_torque_and_follows_joint_velocity_then_switches(
             rig.send_joints(["top_drive", "crown_block"], velocity=[5.0, 1.0])
             rig.send_joints(["top_drive", "hook"], velocity=[5.0])   # lengths differ
             rig.send_joints(["top_drive"], effort=[1e4])         # effort needs torque mode
+            rig.send_joints([f"joint_{i}" for i in range(70)])   # not a command: too many
             spin_for(ros, 0.05)
         spin_for(ros, 0.2)
         assert set(rig.speed[-100:]) == {speed0}                 # nothing of those was used
@@ -192,6 +194,8 @@ def test_kinematic_mode_refuses_torque_and_follows_joint_velocity_then_switches(
         code, out = node.stop()
     assert code == 0, out
     assert "dropped a ~/cmd/top_drive_torque command sent before the drive left its mode" in out
+    # a JointState too long to be a command: the node says why, not "not little-endian CDR?"
+    assert "the last, on ~/cmd/joint_commands: 70 joint names (at most 64)" in out, out
     assert out.count("top_drive_mode is kinematic") >= 2, out   # (one refusal a second is logged;
     # the JointState refusals' texts: tests/session/test_session_top_drive.py)
 
