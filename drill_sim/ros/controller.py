@@ -60,6 +60,14 @@ TORQUE_COMMAND = "~/cmd/top_drive_torque"
 SPEED_COMMAND = "~/cmd/top_drive"
 
 
+def _real(name: str, value: object) -> float:
+    """A real parameter's value: a float, or an integer taken as one (as the rig takes them);
+    ParameterError naming it otherwise (the range is the law's or the caller's to check)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{name} = {value!r}: expected a number")
+    return float(value)
+
+
 def rig_topic(name: str) -> rig_topics.RigTopic:
     """The rig's table entry ``name``; a rig without it is a start-up error naming it."""
     try:
@@ -74,7 +82,8 @@ class ControllerNode(Node):
         super().__init__(NODE_NAME)
         try:
             p = self._declare_all()
-        except (InvalidParameterTypeException, InvalidParameterValueException) as exc:
+        except (InvalidParameterTypeException, InvalidParameterValueException,
+                ParameterError) as exc:
             raise SystemExit(f"{NODE_NAME}: {exc}") from None
         if p["law"] not in CONTROL_LAWS:
             raise SystemExit(f"{NODE_NAME}: law = {p['law']!r}: expected one of "
@@ -90,6 +99,10 @@ class ControllerNode(Node):
         # samples wait (the latest complete one is stepped as soon as the period is known).
         self.core = self._supervisor(period or PROVISIONAL_PERIOD_S, p["enabled"],
                                      p["initial_speed_setpoint_rad_s"])
+        try:
+            self._check_every_law()
+        except ParameterError as exc:
+            raise SystemExit(f"{NODE_NAME}: {exc}") from None
         self._period_known = period > 0.0
         self._deferred: tuple | None = None
         if not self._period_known:
@@ -151,15 +164,18 @@ class ControllerNode(Node):
         )
         values = {}
         for name, default, text in plain:
+            real = isinstance(default, float)         # an integer is taken where a real is
             values[name] = self.declare_parameter(
-                name, default, d(description=text, read_only=name in (
+                name, default, d(description=text, dynamic_typing=real, read_only=name in (
                     "rig", "sample_period_s", "inputs", "setpoint_topic",
                     "setpoint_lockstep", "diagnostics_period_s"))).value
-        z, j = float(values["impedance_nm_s_rad"]), float(values["top_drive_inertia_kg_m2"])
+            if real:
+                values[name] = _real(name, values[name])
+        z, j = values["impedance_nm_s_rad"], values["top_drive_inertia_kg_m2"]
         for law in CONTROL_LAWS:
             for gain, default in law_gain_defaults(law, z, j).items():
-                self.declare_parameter(f"{law}.{gain}", default,
-                                       d(description=f"{law}: {gain} (msg_docs/control.md)"))
+                self.declare_parameter(f"{law}.{gain}", default, d(
+                    description=f"{law}: {gain} (msg_docs/control.md)", dynamic_typing=True))
         return values
 
     def _supervisor(self, h_s: float, enabled: bool, speed_set_rad_s: float) -> Supervisor:
@@ -204,9 +220,18 @@ class ControllerNode(Node):
             self._sample(stamp, slot)
 
     def _gains(self, law: str, changed: dict[str, object] | None = None) -> dict[str, float]:
+        """``law``'s gains, the ``changed`` ones new (ParameterError naming one that is not a
+        number; an integer is taken as the real it is)."""
         changed = changed or {}
-        return {g: float(changed.get(f"{law}.{g}", self.get_parameter(f"{law}.{g}").value))
+        return {g: _real(f"{law}.{g}", changed.get(f"{law}.{g}",
+                                                   self.get_parameter(f"{law}.{g}").value))
                 for g in LAWS[law].GAINS}
+
+    def _check_every_law(self, changed: dict[str, object] | None = None) -> None:
+        """Every law's gains checked, the inactive laws' too (ParameterError naming a bad
+        one): a gain is refused when it is set, not when its law is switched on."""
+        for law in CONTROL_LAWS:
+            self.core.build(law, self._gains(law, changed))
 
     def _on_parameters(self, params: list[Parameter]) -> SetParametersResult:
         changed = {p.name: p.value for p in params}
@@ -217,9 +242,7 @@ class ControllerNode(Node):
                     raise ParameterError(f"{name} is fixed at start; restart to change it")
             if law not in CONTROL_LAWS:
                 raise ParameterError(f"law = {law!r}: expected one of {', '.join(CONTROL_LAWS)}")
-            for name, value in changed.items():
-                if "." in name and not isinstance(value, float):
-                    raise ParameterError(f"{name} = {value!r}: expected a number (double)")
+            self._check_every_law(changed)
             gains = self._gains(law, changed)
             touches_law = "law" in changed or any(n.startswith(f"{law}.") for n in changed)
             if touches_law:

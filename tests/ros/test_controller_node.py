@@ -44,7 +44,7 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
     with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={NS}",
                      "-p", "top_drive_mode:=speed", "-p", "rate_hz:=250.0"), \
          NodeProcess("drill_sim_controller", "--ros-args", "-r", f"__ns:={NS}",
-                     "-p", f"rig:={RIG}", "-p", "enabled:=false",
+                     "-p", f"rig:={RIG}", "-p", "enabled:=false", "-p", "sample_period_s:=0",
                      "-p", "manage_drive_mode:=true", "-p", "inputs:=exact") as ctl:
         controller = f"{NS}/drill_sim_controller"
         wait_for(lambda: len(motor) > 200, ros, 30.0, "the rig running")
@@ -70,6 +70,18 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
         assert not bad.successful and "pid" in bad.reason
         ok = set_double(ros, controller, "z_torque.alpha", 0.5)
         assert ok.successful, ok.reason
+        # a law that is not on: its gains are checked when set, not when it is switched on
+        bad = set_double(ros, controller, "soft_speed.tuning_frequency_hz", float("nan"))
+        assert not bad.successful and "tuning_frequency_hz = nan" in bad.reason, bad.reason
+        bad = set_double(ros, controller, "stiff_pi.kp_nm_s_rad", -1.0)
+        assert not bad.successful and "kp_nm_s_rad" in bad.reason, bad.reason
+        # an integer where a real is expected, as the rig takes it
+        one = _set(ros, controller, "z_torque.alpha",
+                   ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=1))
+        assert one.successful, one.reason
+        words = _set(ros, controller, "z_torque.alpha",
+                     ParameterValue(type=ParameterType.PARAMETER_STRING, string_value="high"))
+        assert not words.successful and "expected a number" in words.reason
         diagnostics.clear()
         wait_for(lambda: any(s.message == "z_torque: controlling" for s in diagnostics), ros,
                  30.0, "diagnostics while controlling")
@@ -99,6 +111,10 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
      "sample_period_s = -0.001: expected 0 (the rig's 1/rate_hz"),
     ("drill_sim_controller", ("-p", "z_torque.measurement_period_s:=2.0"),
      "measurement_period_s = 2.0 is out of range"),
+    ("drill_sim_controller", ("-p", "law:=stiff_pi", "-p", "z_torque.alpha:=-1.0"),
+     "alpha = -1.0"),                         # a law that is not on is checked all the same
+    ("drill_sim_controller", ("-p", "sample_period_s:=abc"),
+     "sample_period_s = 'abc': expected a number"),
     ("drill_sim_controller", ("--params-file", "nosuch.yaml"),
      "cannot start ROS: --params-file nosuch.yaml: no such file; expected the path of a YAML"),
     ("drill_sim_node", ("--params-file", "nosuch.yaml"),
