@@ -89,6 +89,12 @@ def run(args: argparse.Namespace) -> int:
         kept = store.open()
     except StoreError as exc:
         raise UsageError(f"--out {args.out}: {exc}") from None
+    if store.discarded:
+        shown = "; ".join(f"line {n}: {why}" for n, why in store.discarded[:3])
+        more = f" (and {len(store.discarded) - 3} more)" if len(store.discarded) > 3 else ""
+        print(f"drill_sim map: resuming {args.out}: {len(kept)} points kept, "
+              f"{len(store.discarded)} damaged line(s) left out and their points computed "
+              f"again: {shown}{more}", file=sys.stderr)
     pending = [p for p in range(grid.size) if p not in kept]
     started = time.monotonic()
     _compute(args, grid, points, pending, store, workers)

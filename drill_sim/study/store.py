@@ -47,6 +47,7 @@ class MapStore:
         self.points = points
         self.description = json.loads(json.dumps(description))   # as it reads back
         self.rows: dict[int, list[float]] = {}
+        self.discarded: list[tuple[int, str]] = []   # lines of a former run left out: why
         self._file = None
 
     # ---- resuming ------------------------------------------------------------------------
@@ -91,17 +92,26 @@ class MapStore:
             raise StoreError(f"{self.path}: its header is not this study's columns; expected "
                              "another output file, or remove it to start again")
         rows: dict[int, list[float]] = {}
-        for line in lines[1:-1]:        # the last piece has no newline: empty, or torn
+        self.discarded = []
+        for number, line in enumerate(lines[1:-1], start=2):  # the last piece: empty or torn
             fields = line.split(",")
             if len(fields) != len(self.columns):
+                self.discarded.append((number, f"{len(fields)} fields, not {len(self.columns)}"))
                 continue
             try:
                 point = int(fields[0])
                 values = [float(f) for f in fields[1:]]
             except ValueError:
+                self.discarded.append((number, "a field that is not a number"))
                 continue
-            if 0 <= point < self.points and point not in rows:
+            if not 0 <= point < self.points:
+                self.discarded.append((number, f"point {point} is not on this grid"))
+            elif point in rows:
+                self.discarded.append((number, f"point {point} again"))
+            else:
                 rows[point] = values
+        if lines[-1]:
+            self.discarded.append((len(lines), "cut short (the run was stopped while writing it)"))
         return rows
 
     # ---- writing -------------------------------------------------------------------------

@@ -89,6 +89,7 @@ def test_an_interrupted_map_resumes_without_recomputing(tmp_path, reference, mon
     assert len(rows(out)) == 3
     assert "3 of 6 points kept" in capsys.readouterr().err
     with open(out, "a") as fh:
+        fh.write("garbage,1\n")                           # a damaged line, left out
         fh.write("5,150.0,100.0,0.1")                     # a row torn by a kill: recomputed
 
     def counting(points, **kw):
@@ -98,6 +99,9 @@ def test_an_interrupted_map_resumes_without_recomputing(tmp_path, reference, mon
     monkeypatch.setattr(map_command, "compute", counting)
     assert main(["map", *SMALL, "--workers", "1", "--out", str(out)]) == 0
     assert asked == [3]
+    said = capsys.readouterr().err                         # the discarded lines, named
+    assert "3 points kept, 2 damaged line(s) left out" in said, said
+    assert "line 5: 2 fields, not" in said and "line 6: cut short" in said, said
     assert out.read_bytes() == reference.read_bytes()
     assert main(["map", *SMALL, "--out", str(out)]) == 0        # done: nothing to compute
     assert asked == [3, 0]
