@@ -14,7 +14,13 @@ import numpy as np
 from .. import __version__
 from ..core import ParameterError, Simulator
 from ..study.figure import plot_map
-from ..study.parallel import ClusterError, available_cores, compute, require_distributed
+from ..study.parallel import (
+    ClusterError,
+    available_cores,
+    check_address,
+    compute,
+    require_distributed,
+)
 from ..study.store import MapStore, StoreError, description_path
 from ..study.table import METRIC_NAMES, METRICS, metric_row, metric_units
 from ..study.theory import theory_lines
@@ -67,6 +73,7 @@ def run(args: argparse.Namespace) -> int:
         "--workers", args.workers, 1, MAX_WORKERS, what="a process count")
     if args.scheduler is not None:
         try:
+            check_address(args.scheduler)
             require_distributed()
         except ClusterError as exc:
             raise UsageError(f"--scheduler {args.scheduler}: {exc}") from None

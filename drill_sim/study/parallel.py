@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import re
 import signal
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -97,7 +98,22 @@ def require_distributed() -> None:
                            f"installed: {INSTALL_HINT}") from None
 
 
+_ADDRESS = re.compile(r"^(?:(?:tcp|tls|ws|wss|ucx|inproc)://)?[A-Za-z0-9._\-\[\]:]+:[0-9]{1,5}$")
+
+
+def check_address(address: str) -> str:
+    """A Dask scheduler's address as ``dask scheduler`` prints it (``tcp://host:8786``, or
+    ``host:8786``), or ClusterError at once: a malformed one left the Dask client to time out
+    40 s later, in its cleanup, with a traceback."""
+    if not _ADDRESS.match(address):
+        raise ClusterError(f"{address!r} is not a Dask scheduler address: expected "
+                           "protocol://host:port as 'dask scheduler' prints it, such as "
+                           "tcp://10.0.0.5:8786 (or host:port)")
+    return address
+
+
 def _on_dask(points: Sequence[RunSettings], address: str) -> Iterator[tuple[int, Metrics]]:
+    check_address(address)
     require_distributed()
     from distributed import Client
     from distributed import as_completed as dask_completed

@@ -188,6 +188,9 @@ def test_groups_mode_sweeps_any_two_quantities(tmp_path):
     (["--w0", "9"], ["--w0 goes with --groups"]),
     (["--workers", "0"], ["--workers 0", "1 to 1,024"]),
     (["--workers", "2", "--scheduler", "tcp://localhost:8786"], ["--workers", "--scheduler"]),
+    (["--scheduler", "bad address"], ["--scheduler bad address", "not a Dask scheduler address",
+                                      "tcp://10.0.0.5:8786"]),   # at once (a 40 s hang before)
+    (["--scheduler", "tcp://host"], ["not a Dask scheduler address"]),
     (["--plot", "{tmp}/m.txt"], ["--plot", ".txt", "expected one of"]),
     (["--rpm", "60", "--plot", "{tmp}/m.png"], ["--plot", "at least two values of --rpm"]),
     (["--out", "{tmp}/no/such/m.csv"], ["--out", "does not exist"]),
