@@ -1,10 +1,12 @@
 """The console scripts' entry points (``setup.py``; ``ros2 run`` finds the same scripts).
 
-Importing a program (numba, rclpy, the message packages) takes a second or more. A Ctrl-C in
-that time used to print a ``KeyboardInterrupt`` traceback from deep inside an import; here it
-stops the program quietly with status 130. Once imported, the program's own handling of
-SIGINT takes over (Python's, or the handlers of ``ros.stopping.init_stoppable``). A SIGINT
-the program inherited as ignored stays ignored until then.
+Importing a program (numba, rclpy, the message packages) takes a second or more. A Ctrl-C or a
+SIGTERM in that time used to print a ``KeyboardInterrupt`` traceback from deep inside an
+import, or, to a program started in the background by a shell (SIGINT inherited as ignored),
+was lost and the program ran on; here either stops the program quietly, with status 128 + the
+signal's number, whatever it inherited. Once imported, the program's own handling takes over:
+SIGINT is Python's KeyboardInterrupt (the ROS programs then take SIGINT and SIGTERM as a
+request to stop between two units of work, ``ros.stopping.init_stoppable``), SIGTERM as it was.
 """
 
 from __future__ import annotations
@@ -19,12 +21,12 @@ def _quiet(signum: int, frame) -> None:
 
 
 def _main(module: str) -> int:
-    ignored = signal.getsignal(signal.SIGINT) is signal.SIG_IGN
-    if not ignored:
-        signal.signal(signal.SIGINT, _quiet)
+    term = signal.getsignal(signal.SIGTERM)
+    for sig in (signal.SIGINT, signal.SIGTERM):      # whatever was inherited, even SIG_IGN
+        signal.signal(sig, _quiet)
     main = importlib.import_module(module).main
-    if not ignored:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, term)
     return main()
 
 
