@@ -272,7 +272,7 @@ def _measure_kernel(t, x, par, st, ist, ring, noise, win, window_s, out, fresh):
             st[c, S_Y] = xc
             st[c, S_T0] = t
             v0 = xc + par[c, P_BIAS]
-            st[c, S_HELD] = round(v0 / q) * q if q > 0.0 else v0
+            st[c, S_HELD] = np.round(v0 / q) * q if q > 0.0 else v0   # float: never overflows
         elif tau > 0.0:
             dt = t - st[c, S_LAST_T]
             st[c, S_Y] = st[c, S_PREV_X] + (st[c, S_Y] - st[c, S_PREV_X]) * math.exp(-dt / tau)
@@ -290,8 +290,8 @@ def _measure_kernel(t, x, par, st, ist, ring, noise, win, window_s, out, fresh):
                 ist[c, I_NOISE] += 1
                 if ist[c, I_NOISE] >= noise.shape[1]:
                     refill = True
-            if q > 0.0:
-                v = round(v / q) * q
+            if q > 0.0:                          # in floating point: round() is an int64 in
+                v = np.round(v / q) * q          # numba, and 99.9 kN / 1e-15 overflowed it
             if period > 0.0:                     # the next instant after this call
                 ist[c, I_NEXT_K] += 1 + math.floor((t - instant + eps) / period)
             if ist[c, I_COUNT] == cap:           # cannot happen at calls >= dt_s apart

@@ -98,6 +98,19 @@ def test_quantisation_rounds_to_the_nearest_step():
     assert len(np.unique(out)) > 700                      # it is a step of q, not a coarser one
 
 
+@pytest.mark.parametrize("quantum", [1e-15, 1e-9, 1e3, 1e9])
+def test_quantisation_at_the_ends_of_its_range_never_overflows(quantum):
+    """Any accepted quantum, however small or large against the value: the nearest multiple,
+    in floating point (a quantum of 1e-15 on a WOB of 99.9 kN showed -9223.37 N: x/q cast to an
+    int64 overflowed)."""
+    b = bank("wob_n", quantum=quantum)
+    values = np.array([99_939.0, -250e3, 0.0, 1.5e5, 1e9 - 1.0])
+    out, _ = run(b, "wob_n", np.arange(len(values)) * 1e-3, values)
+    np.testing.assert_allclose(out, np.round(values / quantum) * quantum, rtol=1e-15, atol=0)
+    # within half a step, or the value's own floating-point resolution where that is coarser
+    assert np.all(np.abs(out - values) <= quantum / 2 * (1 + 1e-12) + 4 * np.abs(np.spacing(values)))
+
+
 @pytest.mark.parametrize("irregular", [False, True])
 def test_first_order_filter_step_response_is_the_analytic_exponential(irregular):
     """A unit step seen at t1 and held: y(t) = 1 - exp(-(t - t1)/tau) at every later call,
