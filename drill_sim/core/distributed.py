@@ -46,7 +46,9 @@ class Section:
     """A uniform tube of the pipe, SI. Viscous damping per unit length: torsional [N m s/rad
     per m], axial [N s/m per m]; material (Kelvin-Voigt) retardation times [s]: the shear
     stress is G (strain + eta strain rate), likewise E axially. 0 (the defaults): lossless.
-    Its material (moduli [Pa], density [kg/m^3]); None: ``string_waves``' arguments."""
+    Its material (moduli [Pa], density [kg/m^3]); None: ``string_waves``' arguments. Against
+    the wall: the force per unit length pressing it there [N/m] at the centre of each of its
+    ``DAMPING_STATIONS`` equal parts (the stations), and the friction coefficients."""
 
     length_m: float
     od_m: float
@@ -58,6 +60,9 @@ class Section:
     shear_modulus_pa: float | None = None
     young_modulus_pa: float | None = None
     density_kg_m3: float | None = None
+    wall_n_m: tuple[float, ...] = ()       # the wall's force per length [N/m] at each station
+    friction_static: float = 0.0
+    friction_dynamic: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("length_m", "od_m"):
@@ -84,13 +89,20 @@ class Section:
 def pipe_sections(geometry: StringGeometry, torsional_damping: float = 0.0,
                   axial_damping: float = 0.0) -> tuple[Section, ...]:
     """The pipe of a preset's geometry (its sections above the BHA, which is rigid), top
-    first, each with its material, the viscous damping given and the geometry's material
-    damping."""
+    first, each with its material, the viscous damping given, the geometry's material damping
+    and, in a hole that rubs, the wall's force at its stations (the soft string hanging off
+    bottom: ``StringGeometry.wall_forces_n_m``) and the friction coefficients."""
+    well = geometry.well
+    rubs = well is not None and well.rubs
+    fractions = [(j + 0.5) / DAMPING_STATIONS for j in range(DAMPING_STATIONS)]
     return tuple(Section(x.length_m, x.od_m, x.id_m, torsional_damping, axial_damping,
                          geometry.torsional_retardation_time_s,
                          geometry.axial_retardation_time_s, geometry.shear_modulus(x),
-                         geometry.young_modulus(x), geometry.density(x))
-                 for x in geometry.pipe())
+                         geometry.young_modulus(x), geometry.density(x),
+                         tuple(geometry.wall_forces_n_m(i, fractions)) if rubs else (),
+                         well.friction_static if rubs else 0.0,
+                         well.friction_dynamic if rubs else 0.0)
+                 for i, x in enumerate(geometry.pipe()))
 
 
 @dataclass(frozen=True)
@@ -186,23 +198,50 @@ class WaveLine:
 
 
 @dataclass(frozen=True)
+class WallFriction:
+    """The wall's Coulomb friction at the stations, aligned with the segments (the station at
+    each segment's bottom; 0 where there is none): the most the wall holds, static and sliding
+    [F*] (mu n L_part), and kappa = r/L* (the pipe's radius), with sigma = C/(F* L*): a torque
+    tau [C] is the tangential force tau sigma/kappa [F*] and a turning speed omega [1/t*] the
+    sliding speed kappa omega [L*/t*] (``distributed_kernel._junctions_wall``)."""
+
+    static: np.ndarray
+    dynamic: np.ndarray
+    kappa: np.ndarray
+    sigma: float
+
+    def forces(self, v: float, omega: float) -> tuple[np.ndarray, np.ndarray]:
+        """Each station's friction sliding at axial speed ``v`` [L*/t*] and turning speed
+        ``omega`` [1/t*]: (torque [C], axial force [F*]), against the motion."""
+        speed = np.hypot(v, self.kappa * omega)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share_t = np.where(speed > 0.0, self.kappa * omega / speed, 0.0)
+            share_a = np.where(speed > 0.0, v / speed, 0.0)
+        return (self.dynamic * share_t * self.kappa / self.sigma, self.dynamic * share_a)
+
+
+@dataclass(frozen=True)
 class StringWaves:
-    """The distributed string, dimensionless (torques [C], forces [F*], times [t*])."""
+    """The distributed string, dimensionless (torques [C], forces [F*], times [t*]); ``wall``:
+    the friction against the wall (None: none)."""
 
     torsion: WaveLine
     axial: WaveLine
     h: float
+    wall: WallFriction | None = None
 
     @property
     def pipe_inertia(self) -> float:
         """Polar inertia of the pipe over the BHA's, sum of z D."""
         return float(np.sum(self.torsion.z * self.torsion.delay))
 
-    def steady_top_torque(self, bit_torque: float, omega0: float) -> float:
-        """The torque at the top of the string turning steadily at ``omega0`` [1/t*] with
-        ``bit_torque`` [C] on the BHA: that plus every dashpot's c omega0 (the relative dashpots
-        and the low-passes carry nothing in a steady turn)."""
-        return bit_torque + float(np.sum(self.torsion.dashpot)) * omega0
+    def steady_top_torque(self, bit_torque: float, omega0: float, v0: float = 0.0) -> float:
+        """The torque at the top of the string turning steadily at ``omega0`` [1/t*] (and
+        moving down at ``v0`` [L*/t*]) with ``bit_torque`` [C] on the BHA: that plus every
+        dashpot's c omega0 and the wall's sliding friction (the relative dashpots and the
+        low-passes carry nothing in a steady turn)."""
+        wall = 0.0 if self.wall is None else float(np.sum(self.wall.forces(v0, omega0)[0]))
+        return bit_torque + float(np.sum(self.torsion.dashpot)) * omega0 + wall
 
     @property
     def pipe_mass(self) -> float:
@@ -222,6 +261,11 @@ def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float,
         raise ParameterError("sections: expected at least one pipe section")
     sc = params.scales
     ts, c_scale = sc.time_s, sc.stiffness_nm_per_rad
+    rubs = not continuous and any(sec.friction_static > 0.0 and any(sec.wall_n_m)
+                                  for sec in sections)
+    if rubs and any(len(sec.wall_n_m) != stations for sec in sections):
+        raise ParameterError(f"sections: the wall's forces are given at {DAMPING_STATIONS} "
+                             f"stations a section; expected stations = {DAMPING_STATIONS}")
     lines = []
     for modulus_name, default_modulus, prop, damp, retard, imp_scale in (
             ("shear_modulus_pa", shear_modulus_pa, "polar_moment_m4", "torsional_damping",
@@ -235,7 +279,9 @@ def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float,
             speed = math.sqrt(modulus / rho)
             per_length = getattr(sec, damp)
             e = getattr(sec, retard) / ts
-            k = 0 if continuous or (per_length == 0.0 and e == 0.0) else stations
+            # the stations: where the pipe is damped or rubs (then in both families alike,
+            # so the wall's friction couples the axial and the torsional line there)
+            k = 0 if continuous or (per_length == 0.0 and e == 0.0 and not rubs) else stations
             # segment ends: 0, (j - 1/2)/k (the stations, at the centres of k equal parts), 1
             ends = [0.0, *((j + 0.5) / k for j in range(k)), 1.0]
             for j in range(k + 1):
@@ -265,7 +311,27 @@ def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float,
         lines.append(WaveLine(np.array(z), np.array(delay), np.array(steps, dtype=np.int64),
                               np.array(dash), h, np.array(frac), np.array(rel), np.array(tau),
                               np.array(eta), np.array(nu)))
-    return StringWaves(lines[0], lines[1], h)
+    return StringWaves(lines[0], lines[1], h, _wall(params, sections, stations) if rubs else None)
+
+
+def _wall(params: RigParameters, sections: tuple[Section, ...], k: int) -> WallFriction:
+    """The wall's friction at the stations (k a section), aligned with the segments: section
+    by section, k segments ending at a station, then the one ending at the next section."""
+    sc = params.scales
+    static, dynamic, kappa = [], [], []
+    for sec in sections:
+        for j in range(k + 1):
+            if j < k:
+                held = sec.wall_n_m[j] * sec.length_m / k / sc.force_n      # n L_part [F*]
+                static.append(sec.friction_static * held)
+                dynamic.append(sec.friction_dynamic * held)
+                kappa.append(0.5 * sec.od_m / sc.length_m)
+            else:
+                static.append(0.0)
+                dynamic.append(0.0)
+                kappa.append(1.0)
+    return WallFriction(np.array(static), np.array(dynamic), np.array(kappa),
+                        sc.stiffness_nm_per_rad / (sc.force_n * sc.length_m))
 
 
 def geometry_waves(params: RigParameters, geometry: StringGeometry, h: float,

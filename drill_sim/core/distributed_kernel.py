@@ -32,6 +32,8 @@ Memory is fixed: the ring buffers are sized at construction; nothing is allocate
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -56,8 +58,10 @@ X_T_BOTTOM, X_F_BOTTOM, X_V_TOP, X_F_TOP, X_DOM, X_DV, X_A_PREV = range(kn.NX, k
 NXD = kn.NX + 7
 # extra accumulators: dashpot dissipation, torsional [C] and axial [F* L*]; the energy the
 # transport's weighting of two departures dissipates, likewise
-A_DAMPED_ROT, A_DAMPED_AX, A_LOSS_ROT, A_LOSS_AX = range(kn.NA, kn.NA + 4)
-NAD = kn.NA + 4
+A_DAMPED_ROT, A_DAMPED_AX, A_LOSS_ROT, A_LOSS_AX, A_WALL_ROT, A_WALL_AX = range(kn.NA,
+                                                                              kn.NA + 6)
+NAD = kn.NA + 6                          # A_WALL_*: the wall's friction, dissipated likewise
+WALL_SWEEPS = 200                        # Gauss-Seidel sweeps at most (converged: 1e-11)
 # extra output columns: pipe torque and force on the BHA, top axial speed and force
 O_T_BOTTOM, O_F_BOTTOM, O_V_TOP, O_F_TOP = range(kn.NO, kn.NO + 4)
 NOD = kn.NO + 4
@@ -143,9 +147,127 @@ def _junctions(buf, off, n_seg, z, c, rel, slot_of, a_in, b_in, top_speed, botto
     return power
 
 
+@njit(cache=True, inline="always")
+def _slide(r1, r2, d1, d2, cap):
+    """The sliding speeds (u1, u2) of a station pushed by the free force (r1, r2) through the
+    lines' resistances (d1, d2) against the wall's sliding friction ``cap`` (|r| > cap): the
+    friction opposes u, so u_i = r_i/(d_i + lam) with lam = cap/|u|, the root of
+    F(lam) = |(r_i lam/(d_i + lam))_i| - cap, increasing from F(0) = -cap; it lies between the
+    isotropic roots d_min cap/(|r| - cap) and d_max cap/(|r| - cap). Newton from the left,
+    safeguarded by that bracket, to 1e-14 (5 to 8 steps; the friction force itself is then
+    r - d u, so the energy booked stays exact)."""
+    a1, a2 = abs(r1), abs(r2)
+    excess = math.sqrt(a1 * a1 + a2 * a2) - cap
+    lo, hi = min(d1, d2) * cap / excess, max(d1, d2) * cap / excess
+    lam = lo
+    for _ in range(100):
+        e1, e2 = 1.0 / (d1 + lam), 1.0 / (d2 + lam)
+        g1, g2 = a1 * lam * e1, a2 * lam * e2
+        norm = math.sqrt(g1 * g1 + g2 * g2)
+        f = norm - cap
+        if f > 0.0:
+            hi = lam
+        else:
+            lo = lam
+        slope = (g1 * a1 * d1 * e1 * e1 + g2 * a2 * d2 * e2 * e2) / norm
+        new = lam - f / slope if slope > 0.0 else 0.5 * (lo + hi)
+        if not lo <= new <= hi:
+            new = 0.5 * (lo + hi)
+        if abs(new - lam) <= 1e-14 * lam or f == 0.0:
+            lam = new
+            break
+        lam = new
+    return r1 / (d1 + lam), r2 / (d2 + lam)
+
+
+@njit(cache=True)
+def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_bottom,
+                    abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top, v_bottom,
+                    w_static, w_dynamic, w_kappa, sigma, stuck, ws, wa):
+    """``_junctions`` for both lines at once where the wall rubs: at each station the axial
+    and the tangential sliding are one Coulomb contact (the friction against the resultant
+    sliding velocity, at most mu n L_part; exact and set-valued: a station at rest stays there
+    while the wall can hold the free force, static, one sliding stops when the sliding
+    friction can), in the scaled units of ``WallFriction``. With the relative dashpots the
+    stations couple: Gauss-Seidel sweeps until no speed moves (1e-11). ``stuck``: each
+    station's state, updated; ``ws``, ``wa``: the stations' speeds, kept from step to step
+    (the next step's first guess). Returns the dashpots' powers and the
+    wall's, (torsional, axial, wall torsional, wall axial)."""
+    m = tn.size
+    tbuf[toff[0] + tslot[0]] = tb_in[0] + 2.0 * tz[0] * om_top
+    abuf[aoff[0] + aslot[0]] = ab_in[0] + 2.0 * az[0] * v_top
+    coupled = False                          # the sweeps start from the last step's speeds
+    for j in range(m):
+        if tr[j] > 0.0 or ar[j] > 0.0:
+            coupled = True
+    for _ in range(WALL_SWEEPS if coupled else 1):
+        moved = 0.0
+        scale = 1e-300
+        for j in range(1, m):
+            dt = tz[j - 1] + tz[j] + tc[j - 1] + tr[j - 1] + tr[j]
+            da = az[j - 1] + az[j] + ac[j - 1] + ar[j - 1] + ar[j]
+            rt = ta_in[j - 1] - tb_in[j]
+            ra = aa_in[j - 1] - ab_in[j]
+            if coupled:
+                if j > 1:
+                    rt += tr[j - 1] * ws[j - 1]
+                    ra += ar[j - 1] * wa[j - 1]
+                if j < m - 1:
+                    rt += tr[j] * ws[j + 1]
+                    ra += ar[j] * wa[j + 1]
+            cap_s, cap_d = w_static[j - 1], w_dynamic[j - 1]
+            if cap_s <= 0.0:
+                om, v = rt / dt, ra / da
+            else:
+                kap = w_kappa[j - 1]
+                r2 = rt * sigma / kap                 # torque -> tangential force [F*]
+                d2 = dt * sigma / (kap * kap)
+                rn = math.sqrt(ra * ra + r2 * r2)
+                if rn <= (cap_s if stuck[j - 1] else cap_d):
+                    om, v = 0.0, 0.0
+                else:
+                    v, u2 = _slide(ra, r2, da, d2, cap_d)
+                    om = u2 / kap
+            moved = max(moved, abs(om - ws[j]), abs(v - wa[j]))
+            scale = max(scale, abs(om), abs(v))
+            ws[j], wa[j] = om, v
+        if moved <= 1e-11 * scale:
+            break
+    power_t = power_a = wall_t = wall_a = 0.0
+    for j in range(1, m):
+        om, v = ws[j], wa[j]
+        if w_static[j - 1] > 0.0:
+            stuck[j - 1] = 1 if om == 0.0 and v == 0.0 else 0
+            dt = tz[j - 1] + tz[j] + tc[j - 1] + tr[j - 1] + tr[j]
+            da = az[j - 1] + az[j] + ac[j - 1] + ar[j - 1] + ar[j]
+            rt = ta_in[j - 1] - tb_in[j]
+            ra = aa_in[j - 1] - ab_in[j]
+            if j > 1:
+                rt += tr[j - 1] * ws[j - 1]
+                ra += ar[j - 1] * wa[j - 1]
+            if j < m - 1:
+                rt += tr[j] * ws[j + 1]
+                ra += ar[j] * wa[j + 1]
+            wall_t += (rt - dt * om) * om           # the wall's torque times the speed
+            wall_a += (ra - da * v) * v
+        power_t += tc[j - 1] * om * om
+        power_a += ac[j - 1] * v * v
+        if j < m - 1:
+            power_t += tr[j] * (om - ws[j + 1]) ** 2
+            power_a += ar[j] * (v - wa[j + 1]) ** 2
+        tbuf[toff[j - 1] + tn[j - 1] + tslot[j - 1]] = ta_in[j - 1] - 2.0 * tz[j - 1] * om
+        tbuf[toff[j] + tslot[j]] = tb_in[j] + 2.0 * tz[j] * om
+        abuf[aoff[j - 1] + an[j - 1] + aslot[j - 1]] = aa_in[j - 1] - 2.0 * az[j - 1] * v
+        abuf[aoff[j] + aslot[j]] = ab_in[j] + 2.0 * az[j] * v
+    tbuf[toff[m - 1] + tn[m - 1] + tslot[m - 1]] = ta_in[m - 1] - 2.0 * tz[m - 1] * om_bottom
+    abuf[aoff[m - 1] + an[m - 1] + aslot[m - 1]] = aa_in[m - 1] - 2.0 * az[m - 1] * v_bottom
+    return power_t, power_a, wall_t, wall_a
+
+
 @njit(cache=True)
 def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, az, an, af, ac,
-            ar, aoff, abuf, alp, astate, scratch, slots, n_steps, out, out_every, out_row):
+            ar, aoff, abuf, alp, astate, scratch, slots, w_static, w_dynamic, w_kappa, sigma,
+            stuck, n_steps, out, out_every, out_row):
     """Advance ``n_steps`` steps; rows every ``out_every`` steps (the lumped kernel's columns,
     then O_T_BOTTOM.. if ``out`` has them); return the next free row. A step that would turn
     the bit more than a sector is refused (K_REFUSED = 1), as in the lumped kernel."""
@@ -175,6 +297,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
     work_w, work_h = acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST]
     damp_r, damp_a = acc[A_DAMPED_ROT], acc[A_DAMPED_AX]
     loss_r, loss_a = acc[A_LOSS_ROT], acc[A_LOSS_AX]
+    wall_r, wall_a = acc[A_WALL_ROT], acc[A_WALL_AX]
+    rubs = w_static.size > 0
     ts_top = x[kn.X_TS]
     # the top drive (kinematic: the ideal speed source omega0)
     mode = np.int64(p[kn.P_MODE])
@@ -261,10 +385,20 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
         damp_r += h * dr
         damp_a += h * da
         # the string: reflections at the BHA, junctions, the top
-        damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top,
-                                 om_int / h, scratch[4], scratch[5])
-        damp_a += h * _junctions(abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top,
-                                 v_int / h, scratch[4], scratch[5])
+        if rubs:
+            pt, pa, fw_t, fw_a = _junctions_wall(
+                tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_int / h,
+                abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top, v_int / h,
+                w_static, w_dynamic, w_kappa, sigma, stuck, scratch[4], scratch[5])
+            damp_r += h * pt
+            damp_a += h * pa
+            wall_r += h * fw_t
+            wall_a += h * fw_a
+        else:
+            damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top,
+                                     om_int / h, scratch[4], scratch[5])
+            damp_a += h * _junctions(abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top,
+                                     v_int / h, scratch[4], scratch[5])
         work_td += h * ts_top * om_top
         loss_r += h * lr
         loss_a += h * la
@@ -316,4 +450,5 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
     acc[kn.A_WORK_WEIGHT], acc[kn.A_WORK_HOIST] = work_w, work_h
     acc[A_DAMPED_ROT], acc[A_DAMPED_AX] = damp_r, damp_a
     acc[A_LOSS_ROT], acc[A_LOSS_AX] = loss_r, loss_a
+    acc[A_WALL_ROT], acc[A_WALL_AX] = wall_r, wall_a
     return out_row

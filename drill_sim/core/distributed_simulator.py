@@ -43,17 +43,19 @@ class _Line:
         self.off = np.concatenate([[0], np.cumsum(2 * self.n)[:-1]]).astype(np.int64)
         self.buf = np.zeros(int(2 * self.n.sum()))
 
-    def fill_steady(self, force: float, speed: float) -> float:
+    def fill_steady(self, force: float, speed: float, wall: np.ndarray | None = None) -> float:
         """Every segment carrying ``force`` at the BHA plus the dashpots below it, at
-        ``speed``; returns the force at the top."""
-        below = force + self.c[-1] * speed
+        ``speed``, and the wall's friction ``wall`` at each station (None: none); returns the
+        force at the top."""
+        extra = np.zeros(self.n.size) if wall is None else wall
+        below = force + self.c[-1] * speed + extra[-1]
         for j in range(self.n.size - 1, -1, -1):
             o, m = self.off[j], self.n[j]
             self.buf[o:o + m] = below + self.z[j] * speed
             self.buf[o + m:o + 2 * m] = below - self.z[j] * speed
             self.state[:, j] = below + self.z[j] * speed, below - self.z[j] * speed
             if j > 0:
-                below += self.c[j - 1] * speed
+                below += self.c[j - 1] * speed + extra[j - 1]
         return below
 
     def energy(self, h: float, steps: int) -> float:
@@ -84,6 +86,11 @@ class StringSimulator(Simulator):
         m = max(self._t.n.size, self._a.n.size)
         self._scratch = np.zeros((10, m))
         self._slots = np.zeros((2, m), dtype=np.int64)
+        wall = waves.wall                      # the wall's friction at the stations, or none
+        self._wall = (np.zeros(0), np.zeros(0), np.zeros(0), 1.0) if wall is None else (
+            np.ascontiguousarray(wall.static), np.ascontiguousarray(wall.dynamic),
+            np.ascontiguousarray(wall.kappa), float(wall.sigma))
+        self._stuck = (self._wall[0] > 0.0).astype(np.int64)     # at rest: held
         super().__init__(groups, waves.h, stick_window=stick_window,
                          hoist_speed_limit=hoist_speed_limit, nodes=nodes, drive=drive)
 
@@ -107,39 +114,53 @@ class StringSimulator(Simulator):
         self.set_commands(w0, omega0)          # the hook holds the available weight
         st = self.steady_state
         x = self._x
-        x[kn.X_TS] = self._t.fill_steady(st.t0, omega0)
+        wall_t, wall_a = self._wall_forces(st.v0, omega0)
+        self._stuck[:] = 0                     # sliding everywhere
+        x[kn.X_TS] = self._t.fill_steady(st.t0, omega0, wall_t)
         d = self.drive
         if not d.holds(x[kn.X_TS]):
             raise ParameterError(f"steady drilling needs a motor torque of {x[kn.X_TS]:.4g} C, "
                                  f"outside the drive's limits [{d.t_min:.4g}, {d.t_max:.4g}] C")
         x[kn.X_TM] = x[kn.X_TREF] = x[kn.X_DRIVE_I] = self._c[kn.C_T_CMD] = x[kn.X_TS]
-        x[dk.X_F_TOP] = self._a.fill_steady(w_bit, st.v0)
-        x[kn.X_PHI_TD] = self._twist(st.t0, omega0)
+        x[dk.X_F_TOP] = self._a.fill_steady(w_bit, st.v0, wall_a)
+        x[kn.X_PHI_TD] = self._twist(st.t0, omega0, wall_t)
         x[dk.X_T_BOTTOM], x[dk.X_F_BOTTOM], x[dk.X_V_TOP] = st.t0, w_bit, st.v0
         x[dk.X_DOM] = x[dk.X_DV] = 0.0
         x[dk.X_A_PREV] = self._t.buf[self._t.off[-1]]
 
+    def _wall_forces(self, v: float, omega: float) -> tuple[np.ndarray | None, ...]:
+        """The wall's sliding friction at each station (torque [C], force [F*]), or Nones."""
+        if self.waves.wall is None:
+            return None, None
+        return self.waves.wall.forces(v, omega)
+
     def _bit_weight(self, w0: float, omega0: float) -> float:
-        """The weight on bit of steady drilling under the hook's w0: w = w0 - sum(c_a) v0(w),
-        by fixed-point iteration (the drag's share is small: sum(c_a) dv0/dw << 1)."""
+        """The weight on bit of steady drilling under the hook's w0: w = w0 - sum(c_a) v0(w)
+        - the wall's axial drag at v0(w), by fixed-point iteration (the drag's share is small:
+        its derivative in w << 1)."""
         from .stability import steady_state
         drag, w = float(np.sum(self._a.c)), w0
+        if drag == 0.0 and self.waves.wall is None:
+            return w
         for _ in range(100):
-            if drag == 0.0:
-                break
-            w_new = w0 - drag * steady_state(self.groups, w, omega0).v0
+            v0 = steady_state(self.groups, w, omega0).v0
+            wall_a = self._wall_forces(v0, omega0)[1]
+            w_new = w0 - drag * v0 - (0.0 if wall_a is None else float(np.sum(wall_a)))
             if abs(w_new - w) <= 1e-15 * abs(w0):
                 break
             w = w_new
         return w
 
-    def _twist(self, t0: float, omega0: float) -> float:
-        """Twist of the steady string, top angle minus bit angle: sum of T_j D_j / z_j."""
-        line, total, torque = self.waves.torsion, 0.0, t0 + line_c_last(self.waves) * omega0
+    def _twist(self, t0: float, omega0: float, wall: np.ndarray | None = None) -> float:
+        """Twist of the steady string, top angle minus bit angle: sum of T_j D_j / z_j (the
+        wall's friction ``wall`` at the stations, None: none)."""
+        extra = np.zeros(self.waves.torsion.z.size) if wall is None else wall
+        line = self.waves.torsion
+        total, torque = 0.0, t0 + line_c_last(self.waves) * omega0 + extra[-1]
         for j in range(line.z.size - 1, -1, -1):
             total += torque * line.delay[j] / line.z[j]
             if j > 0:
-                torque += line.dashpot[j - 1] * omega0
+                torque += line.dashpot[j - 1] * omega0 + extra[j - 1]
         return total
 
     @property
@@ -158,6 +179,7 @@ class StringSimulator(Simulator):
         for line in (self._t, self._a):
             line.buf[:] = 0.0
             line.state[:] = 0.0
+        self._stuck[:] = self._wall[0] > 0.0    # at rest against the wall
         self._x[kn.NX:] = 0.0
 
     def load_state(self, **_: object) -> None:
@@ -170,8 +192,8 @@ class StringSimulator(Simulator):
         row = int(dk.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
                              t.z, t.n, t.f, t.c, t.rel, t.off, t.buf, t.lowpass, t.state, a.z,
                              a.n, a.f, a.c, a.rel, a.off, a.buf, a.lowpass, a.state,
-                             self._scratch,
-                             self._slots, n_steps, out, every, row))
+                             self._scratch, self._slots, *self._wall, self._stuck, n_steps,
+                             out, every, row))
         if self._k[kn.K_REFUSED]:
             self._refuse_step()
         return row
@@ -207,6 +229,17 @@ class StringSimulator(Simulator):
         """Energy the pipe's damping (dashpots, viscous and material) dissipated over the
         window (torsional [C], axial [F* L*])."""
         return float(self._acc[dk.A_DAMPED_ROT]), float(self._acc[dk.A_DAMPED_AX])
+
+    def wall_friction(self) -> tuple[float, float]:
+        """Energy the wall's friction dissipated over the window (torsional [C], axial
+        [F* L*])."""
+        return float(self._acc[dk.A_WALL_ROT]), float(self._acc[dk.A_WALL_AX])
+
+    @property
+    def wall_held(self) -> np.ndarray:
+        """Which stations the wall holds at rest (1) or the pipe slides past (0), aligned with
+        the segments (``WallFriction``; empty without one)."""
+        return self._stuck.copy()
 
     def transport_loss(self) -> tuple[float, float]:
         """Energy the transport's weighting of two departures (a fractional travel time)

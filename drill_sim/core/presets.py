@@ -21,6 +21,7 @@ from .parameters import ParameterError, RigParameters, check_number
 from .resources import read_yaml, shipped_names
 from .string_geometry import StringGeometry, StringSection
 from .top_drive import KP_PER_IMPEDANCE, TopDriveParameters
+from .well import Well
 
 _BIT_KEYS = ("bit_radius_m", "blade_count", "intrinsic_specific_energy_pa", "cutting_inclination",
              "contact_stress_pa", "wear_flat_length_m", "friction_coefficient",
@@ -70,8 +71,11 @@ def preset_from_dict(name: str, data: object) -> Preset:
     bit = _section(name, data, "bit", _BIT_KEYS, required=True)
     string = None
     if "string" in data:
-        string = string_from_dict(name, data["string"])
+        string = string_from_dict(name, data["string"], data.get("well"))
         lumped = string.lumped()
+    elif "well" in data:
+        raise ParameterError(f"preset {name!r}: a 'well' section needs a 'string' section (the "
+                             "string's geometry); a 'lumped' section has none")
     else:
         lumped = _section(name, data, "lumped", _LUMPED_KEYS, required=True)
     commands = _section(name, data, "commands", ("top_drive_speed_rpm", "weight_on_bit_kn"),
@@ -80,11 +84,11 @@ def preset_from_dict(name: str, data: object) -> Preset:
                      required=False, need=())
     if string is not None and drive.get("drive_kp_nm_s_rad") is None:
         drive["drive_kp_nm_s_rad"] = KP_PER_IMPEDANCE * string.torsional_impedance_nm_s_rad
-    unknown = set(data) - {"description", "bit", "string", "lumped", "commands", "top_drive",
-                           "string_model"}
+    unknown = set(data) - {"description", "bit", "string", "lumped", "well", "commands",
+                           "top_drive", "string_model"}
     if unknown:
         raise ParameterError(f"preset {name!r}: unknown section(s) {sorted(unknown)}; expected "
-                             "description, bit, string or lumped, commands, top_drive, "
+                             "description, bit, string or lumped, well, commands, top_drive, "
                              "string_model")
     string_model = _string_model(name, data.get("string_model", "lumped"), string)
     return Preset(
@@ -104,11 +108,35 @@ def preset_from_dict(name: str, data: object) -> Preset:
 _SECTION_KEYS = tuple(f.name for f in fields(StringSection))
 
 
-def string_from_dict(name: str, string: object) -> StringGeometry:
+_WELL_KEYS = ("survey", "friction_static", "friction_dynamic")
+
+
+def well_from_dict(name: str, well: object) -> Well:
+    """A preset's ``well`` section: ``survey`` (rows [measured depth m, inclination deg,
+    azimuth deg], the first at 0 m, down to the bit), ``friction_static`` and
+    ``friction_dynamic`` (the string against the wall; the rule between them is Coulomb's,
+    exact: a part of the string at rest stays there while the wall can hold it)."""
+    given = _section(name, {"well": well}, "well", _WELL_KEYS, required=True, need=())
+    survey = given.get("survey", [])
+    if not isinstance(survey, list):
+        raise ParameterError(f"preset {name!r}: well.survey is {type(survey).__name__}: "
+                             "expected a list of rows [measured depth m, inclination deg, "
+                             "azimuth deg]")
+    try:
+        return Well(survey=tuple(tuple(r) if isinstance(r, list) else r for r in survey),
+                    friction_static=given.get("friction_static", 0.0),
+                    friction_dynamic=given.get("friction_dynamic",
+                                               given.get("friction_static", 0.0)))
+    except ParameterError as exc:
+        raise ParameterError(f"preset {name!r}: well: {exc}") from None
+
+
+def string_from_dict(name: str, string: object, well: object = None) -> StringGeometry:
     """A preset's ``string`` section: the two-section keys (``pipe_*``, ``collar_*``) or
     ``sections``, a list of ``{length_m, od_m, id_m, bha, shear_modulus_pa, young_modulus_pa,
-    steel_density_kg_m3}`` (the last four optional), top first."""
-    keys = tuple(f.name for f in fields(StringGeometry))
+    steel_density_kg_m3}`` (the last four optional), top first; in the hole ``well``
+    describes (its section, ``well_from_dict``; None: vertical, no friction)."""
+    keys = tuple(f.name for f in fields(StringGeometry) if f.name != "well")
     given = _section(name, {"string": string}, "string", keys, required=True, need=())
     sections = given.pop("sections", None)
     if sections is not None:
@@ -127,6 +155,8 @@ def string_from_dict(name: str, string: object) -> StringGeometry:
             except ParameterError as exc:
                 raise ParameterError(f"preset {name!r}: {where}: {exc}") from None
         given["sections"] = tuple(parts)
+    if well is not None:
+        given["well"] = well_from_dict(name, well)
     try:
         return StringGeometry(**given)
     except ParameterError as exc:

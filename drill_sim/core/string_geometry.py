@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass, fields
 
 from .parameters import GRAVITY_M_S2, ParameterError, check_number
+from .well import Well, along_hole, normal_force
 
 
 def polar_moment_m4(od_m: float, id_m: float) -> float:
@@ -90,6 +91,7 @@ class StringGeometry:
     axial_retardation_time_s: float = 0.0
     young_modulus_pa: float = 200e9
     sections: tuple[StringSection, ...] = ()
+    well: Well | None = None
 
     def __post_init__(self) -> None:
         shorthand = ("pipe_length_m", "pipe_od_m", "pipe_id_m", "collar_length_m", "collar_od_m",
@@ -103,7 +105,7 @@ class StringGeometry:
             raise ParameterError(f"{missing[0]} is missing: expected the two-section keys "
                                  f"{', '.join(shorthand)}, or sections")
         for f in fields(self):
-            if f.name == "sections" or (f.name in shorthand and self.sections):
+            if f.name in ("sections", "well") or (f.name in shorthand and self.sections):
                 continue
             object.__setattr__(self, f.name, check_number(
                 f.name, getattr(self, f.name),
@@ -128,6 +130,10 @@ class StringGeometry:
                     "sections: expected the pipe's sections first (at least one) and the BHA's "
                     "(bha: true, at least one) after them, top to bottom; got "
                     + ", ".join("bha" if k else "pipe" for k in kinds))
+        if self.well is not None:
+            if not isinstance(self.well, Well):
+                raise ParameterError("well: expected a Well")
+            self.well.check_depth(self.length_m)
         for part in self.parts():
             if self.density(part) <= self.mud_density_kg_m3:
                 raise ParameterError(
@@ -153,6 +159,53 @@ class StringGeometry:
 
     def young_modulus(self, part: StringSection) -> float:
         return part.young_modulus_pa or self.young_modulus_pa
+
+    def buoyed_weight_n_m(self, part: StringSection) -> float:
+        """A section's buoyed weight per unit length [N/m]."""
+        return (self.density(part) - self.mud_density_kg_m3) * GRAVITY_M_S2 * part.area_m2
+
+    @property
+    def length_m(self) -> float:
+        """The string's length, top to bit [m] (the bit's measured depth)."""
+        return float(sum(x.length_m for x in self.parts()))
+
+    def tops_m(self) -> list[float]:
+        """Each section's top, measured depth [m]."""
+        tops, md = [], 0.0
+        for x in self.parts():
+            tops.append(md)
+            md += x.length_m
+        return tops
+
+    def hanging_tension_n(self, md_m: float) -> float:
+        """The effective tension [N] at measured depth ``md_m`` of the string hanging off bottom:
+        the buoyed weight of what hangs below, along the hole's axis."""
+        well = self.well or Well()
+        tops, below = self.tops_m(), []
+        for top, x in zip(tops, self.parts(), strict=True):
+            start, end = max(top, md_m), top + x.length_m
+            if end > start:
+                below.append((start, end - start, self.buoyed_weight_n_m(x)))
+        if not below:
+            return 0.0
+        starts, lengths, weights = zip(*below, strict=True)
+        return float(sum(along_hole(well, list(starts), list(lengths), list(weights))))
+
+    def wall_forces_n_m(self, part_index: int, fractions: list[float]) -> list[float]:
+        """The soft string's wall force per unit length [N/m] at ``fractions`` of section
+        ``part_index``'s length (hanging off bottom; none in a vertical hole or without a
+        survey)."""
+        well = self.well
+        x = self.parts()[part_index]
+        if well is None or not well.survey:
+            return [0.0] * len(fractions)
+        top = self.tops_m()[part_index]
+        out = []
+        for f in fractions:
+            md = top + f * x.length_m
+            out.append(normal_force(well, md, self.hanging_tension_n(md),
+                                    self.buoyed_weight_n_m(x)))
+        return out
 
     @property
     def pipe_length_total_m(self) -> float:
@@ -184,6 +237,15 @@ class StringGeometry:
             "bha_inertia_kg_m2": sum(self.density(x) * x.polar_moment_m4 * x.length_m
                                      for x in bha),
             "bha_mass_kg": sum(self.density(x) * x.area_m2 * x.length_m for x in bha),
-            "submerged_weight_n": sum((rho - self.mud_density_kg_m3) * GRAVITY_M_S2 * volume
-                                      for rho, volume in volumes.items()),
+            "submerged_weight_n": self._submerged_weight_n(volumes),
         }
+
+    def _submerged_weight_n(self, volumes: dict[float, float]) -> float:
+        """W_s: the buoyed weight along the hole's axis at the bit (a vertical hole: the whole
+        buoyed weight, (rho - rho_mud) g V to the last bit; a survey: sum w_i int cos(incl))."""
+        if self.well is None or not self.well.survey:
+            return sum((rho - self.mud_density_kg_m3) * GRAVITY_M_S2 * volume
+                       for rho, volume in volumes.items())
+        parts = self.parts()
+        return float(sum(along_hole(self.well, self.tops_m(), [x.length_m for x in parts],
+                                    [self.buoyed_weight_n_m(x) for x in parts])))

@@ -16,6 +16,7 @@ from ..core.parameters import ParameterError, RigParameters
 from ..core.rig import Rig
 from ..core.string_geometry import StringGeometry, StringSection
 from ..core.top_drive import TopDriveParameters
+from ..core.well import Well
 
 COMMAND_FRAMES = ("", "top_drive")        # frame_id accepted on commands
 RIG_FIELDS = tuple(f.name for f in fields(RigParameters))
@@ -91,6 +92,11 @@ def geometry_record(geometry: StringGeometry) -> dict[str, str]:
                 record["sections"] = json.dumps([
                     {k.name: getattr(x, k.name) for k in fields(x)
                      if getattr(x, k.name) is not None} for x in value])
+        elif f.name == "well":
+            if value is not None:
+                record["well"] = json.dumps({"survey": [list(r) for r in value.survey],
+                                             "friction_static": value.friction_static,
+                                             "friction_dynamic": value.friction_dynamic})
         elif value is not None:
             record[f.name] = repr(float(value))
     return record
@@ -101,11 +107,16 @@ def geometry_from_record(record: dict[str, str]) -> StringGeometry:
     names = {f.name for f in fields(StringGeometry)}
     try:
         given: dict[str, object] = {k: float(v) for k, v in record.items()
-                                    if k in names and k != "sections"}
+                                    if k in names and k not in ("sections", "well")}
         if "sections" in record:
             given["sections"] = tuple(StringSection(**x) for x in json.loads(record["sections"]))
+        if "well" in record:
+            well = json.loads(record["well"])
+            given["well"] = Well(survey=tuple(tuple(r) for r in well["survey"]),
+                                 friction_static=well["friction_static"],
+                                 friction_dynamic=well["friction_dynamic"])
         return StringGeometry(**given)
-    except (TypeError, ValueError, AttributeError) as exc:
+    except (TypeError, ValueError, AttributeError, KeyError) as exc:
         raise ParameterError(f"string record {record!r}: not a pipe geometry ({exc})") from None
 
 

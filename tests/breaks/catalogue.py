@@ -32,6 +32,7 @@ T_DIST_TD = "tests/core/test_distributed_top_drive.py"
 T_DAMP = "tests/core/test_distributed_damping.py"
 T_MODES = "tests/core/test_string_modes.py"
 T_SECTIONS = "tests/core/test_string_sections.py"
+T_WELL = "tests/core/test_well.py"
 T_LAWS = "tests/control/test_control_laws.py"
 T_SUP = "tests/control/test_control_supervisor.py"
 T_EVAL = "tests/control/test_control_evaluation.py"
@@ -99,6 +100,29 @@ BREAKS: tuple[Break, ...] = (
         "            c = 1.0 / sum(x.length_m / (self.shear_modulus(x) * x.polar_moment_m4)",
         "            c = 1.0 / sum(x.length_m / (self.shear_modulus_pa * x.polar_moment_m4)",
         f"{T_SECTIONS}::test_lumped_figures_of_a_tapered_string_are_the_closed_forms"),
+    # ---- the well: survey, wall force, friction along the string ---------------------------
+    one("W_s not projected on the hole's axis (the whole buoyed weight)", CORE + "well.py",
+        "            total += 0.5 * (b - a) * float(np.sum(wq * t[:, 2]))\n",
+        "            total += 0.5 * (b - a) * float(np.sum(wq))\n",
+        f"{T_WELL}::test_submerged_weight_is_the_weight_along_the_holes_axis"),
+    one("the bend's tension term on the weight's side", CORE + "well.py",
+        "    return float(np.linalg.norm(tension_n * k + weight_n_m * (g - (g @ t) * t)))\n",
+        "    return float(np.linalg.norm(-tension_n * k + weight_n_m * (g - (g @ t) * t)))\n",
+        f"{T_WELL}::test_wall_force_is_the_soft_strings"),
+    one("the wall's force counted per station, not per part", CORE + "distributed.py",
+        "                held = sec.wall_n_m[j] * sec.length_m / k / sc.force_n"
+        "      # n L_part [F*]\n",
+        "                held = sec.wall_n_m[j] * sec.length_m / sc.force_n\n",
+        f"{T_WELL}::test_break_off_torque_of_a_slant_well_is_the_closed_form"),
+    one("a station at rest held to the sliding friction, not the static", CORE
+        + "distributed_kernel.py",
+        "                if rn <= (cap_s if stuck[j - 1] else cap_d):\n",
+        "                if rn <= cap_d:\n",
+        f"{T_WELL}::test_static_above_sliding_friction_breaks_off_from_the_top"),
+    one("the wall's dissipation not booked", CORE + "distributed_kernel.py",
+        "            wall_t += (rt - dt * om) * om           # the wall's torque times the speed\n",
+        "            wall_t += 0.0 * (rt - dt * om) * om\n",
+        f"{T_WELL}::test_energy_balance_includes_the_walls_friction"),
     # ---- sensors ------------------------------------------------------------------------
     one("severity divided by the mid-range, not the mean", CORE + "sensors.py",
         "mean = win[W_SUM] / win[W_N] if win[W_N] > 0 else w",

@@ -108,7 +108,8 @@ def test_quantisation_at_the_ends_of_its_range_never_overflows(quantum):
     out, _ = run(b, "wob_n", np.arange(len(values)) * 1e-3, values)
     np.testing.assert_allclose(out, np.round(values / quantum) * quantum, rtol=1e-15, atol=0)
     # within half a step, or the value's own floating-point resolution where that is coarser
-    assert np.all(np.abs(out - values) <= quantum / 2 * (1 + 1e-12) + 4 * np.abs(np.spacing(values)))
+    bound = quantum / 2 * (1 + 1e-12) + 4 * np.abs(np.spacing(values))
+    assert np.all(np.abs(out - values) <= bound)
 
 
 @pytest.mark.parametrize("irregular", [False, True])
