@@ -180,6 +180,24 @@ def _slide(r1, r2, d1, d2, cap):
     return r1 / (d1 + lam), r2 / (d2 + lam)
 
 
+@njit(cache=True, inline="always")
+def _free(j, m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in, ws, wa, coupled):
+    """Station j's resistances and free forces (torsional and axial: what the arriving waves
+    and the neighbours' relative dashpots give it at zero speed of its own)."""
+    dt = tz[j - 1] + tz[j] + tc[j - 1] + tr[j - 1] + tr[j]
+    da = az[j - 1] + az[j] + ac[j - 1] + ar[j - 1] + ar[j]
+    rt = ta_in[j - 1] - tb_in[j]
+    ra = aa_in[j - 1] - ab_in[j]
+    if coupled:
+        if j > 1:
+            rt += tr[j - 1] * ws[j - 1]
+            ra += ar[j - 1] * wa[j - 1]
+        if j < m - 1:
+            rt += tr[j] * ws[j + 1]
+            ra += ar[j] * wa[j + 1]
+    return dt, da, rt, ra
+
+
 @njit(cache=True)
 def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_bottom,
                     abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top, v_bottom,
@@ -204,17 +222,8 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
         moved = 0.0
         scale = 1e-300
         for j in range(1, m):
-            dt = tz[j - 1] + tz[j] + tc[j - 1] + tr[j - 1] + tr[j]
-            da = az[j - 1] + az[j] + ac[j - 1] + ar[j - 1] + ar[j]
-            rt = ta_in[j - 1] - tb_in[j]
-            ra = aa_in[j - 1] - ab_in[j]
-            if coupled:
-                if j > 1:
-                    rt += tr[j - 1] * ws[j - 1]
-                    ra += ar[j - 1] * wa[j - 1]
-                if j < m - 1:
-                    rt += tr[j] * ws[j + 1]
-                    ra += ar[j] * wa[j + 1]
+            dt, da, rt, ra = _free(j, m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in,
+                                   ws, wa, coupled)
             cap_s, cap_d = w_static[j - 1], w_dynamic[j - 1]
             if cap_s <= 0.0:
                 om, v = rt / dt, ra / da
@@ -238,16 +247,8 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
         om, v = ws[j], wa[j]
         if w_static[j - 1] > 0.0:
             stuck[j - 1] = 1 if om == 0.0 and v == 0.0 else 0
-            dt = tz[j - 1] + tz[j] + tc[j - 1] + tr[j - 1] + tr[j]
-            da = az[j - 1] + az[j] + ac[j - 1] + ar[j - 1] + ar[j]
-            rt = ta_in[j - 1] - tb_in[j]
-            ra = aa_in[j - 1] - ab_in[j]
-            if j > 1:
-                rt += tr[j - 1] * ws[j - 1]
-                ra += ar[j - 1] * wa[j - 1]
-            if j < m - 1:
-                rt += tr[j] * ws[j + 1]
-                ra += ar[j] * wa[j + 1]
+            dt, da, rt, ra = _free(j, m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in,
+                                   ws, wa, True)
             wall_t += (rt - dt * om) * om           # the wall's torque times the speed
             wall_a += (ra - da * v) * v
         power_t += tc[j - 1] * om * om
