@@ -69,10 +69,10 @@ class Bag:
         if path.is_file():
             try:
                 with path.open("rb") as f:
-                    head = f.read(len(MAGIC))
+                    head = f.read(16)                  # enough to say what it is, if not MCAP
             except OSError as exc:
                 raise BagError(f"{path}: cannot be read ({exc.strerror})") from None
-            if head != MAGIC:                  # every tool says the same of a file that is not
+            if head[:len(MAGIC)] != MAGIC:     # every tool says the same of a file that is not
                 raise BagError(f"{path}: not an MCAP file ({what_it_is(memoryview(head))})")
             return cls(path, [path], None)
         if path.exists() and not path.is_dir():
