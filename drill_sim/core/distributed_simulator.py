@@ -103,11 +103,11 @@ class StringSimulator(Simulator):
     # ---- starts --------------------------------------------------------------------------
     def start_steady(self, w0: float, omega0: float, perturbation: float = 0.0) -> None:
         """Steady drilling everywhere: the string turns at omega0 carrying the steady torque
-        (plus the dashpots' share above each), moves at v0 with the hook holding w0; the
-        axial dashpots take c v0 of it, so the bit drills steadily under w0 - sum(c) v0
-        (``steady_state``); BHA speed perturbed. A top drive in the loop turns at omega0
-        under the torque at the top of the string (its motor torque, PI integral term and
-        torque command)."""
+        (plus the dashpots' and the wall's sliding friction's share above each), moves at v0
+        with the hook holding w0; the axial dashpots and the wall take their drag of it, so
+        the bit drills steadily under w0 less that (``steady_state``); BHA speed perturbed.
+        A top drive in the loop turns at omega0 under the torque at the top of the string (its
+        motor torque, PI integral term and torque command)."""
         self._extend()
         w_bit = self._bit_weight(w0, omega0)
         super().start_steady(w_bit, omega0, perturbation)
