@@ -109,10 +109,11 @@ class StringSimulator(Simulator):
         A top drive in the loop turns at omega0 under the torque at the top of the string (its
         motor torque, PI integral term and torque command)."""
         self._extend()
+        from .stability import steady_state
         w_bit = self._bit_weight(w0, omega0)
         super().start_steady(w_bit, omega0, perturbation)
         self.set_commands(w0, omega0)          # the hook holds the available weight
-        st = self.steady_state
+        st = steady_state(self.groups, w_bit, omega0)      # the bit's (``steady_state``)
         x = self._x
         wall_t, wall_a = self._wall_forces(st.v0, omega0)
         self._stuck[:] = 0                     # sliding everywhere

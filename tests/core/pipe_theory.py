@@ -167,3 +167,19 @@ def damped_roots(kind: str, p: Pipe, count: int, top=None) -> list[complex]:
                 and all(abs(s - r) > 1e-6 * abs(s) for r in roots)):
             roots.append(complex(s))
     return sorted(roots, key=lambda r: r.imag)[:count]
+
+
+def energy_ledger(sim, lead: float = 100.0, window: float = 100.0):
+    """Run ``sim`` for ``lead`` [t*], then over a window of ``window`` [t*]: (metrics, the
+    torsional and the axial energy accounted for: the bit's dissipation, the dashpots', the
+    transport's loss, the wall's friction and the change of stored energy), to be compared with
+    the work put in at the top."""
+    sim.run(lead)
+    sim.reset_window()
+    e0 = sim.energy()
+    m = sim.run(window).metrics
+    e1 = sim.energy()
+    damped, loss, wall = sim.damped(), sim.transport_loss(), sim.wall_friction()
+    rot = m.dissipated_rotation + damped[0] + loss[0] + wall[0] + e1[0] - e0[0]
+    ax = m.dissipated_axial + damped[1] + loss[1] + wall[1] + e1[1] - e0[1]
+    return m, rot, ax

@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from pipe_theory import lossless_string
+from pipe_theory import energy_ledger, lossless_string
 
 from drill_sim.core import ParameterError, load_preset
 from drill_sim.core import kernel as kn
@@ -131,14 +131,8 @@ def test_energy_balance_includes_the_walls_friction():
     _p, params = _rig(g)
     sim = StringSimulator(params.groups, geometry_waves(params, g, H))
     sim.start_steady(9.6, 1.32, 1e-3)
-    sim.run(100.0)
-    sim.reset_window()
-    e0 = sim.energy()
-    m = sim.run(100.0).metrics
-    e1 = sim.energy()
-    damped, loss, wall = sim.damped(), sim.transport_loss(), sim.wall_friction()
-    rot = m.dissipated_rotation + damped[0] + loss[0] + wall[0] + e1[0] - e0[0]
-    ax = m.dissipated_axial + damped[1] + loss[1] + wall[1] + e1[1] - e0[1]
+    m, rot, ax = energy_ledger(sim)
+    wall = sim.wall_friction()
     assert rot == pytest.approx(m.work_top_drive, rel=1e-5)
     assert ax == pytest.approx(m.work_weight + m.work_hoist, rel=1e-5)
     assert wall[0] > 0.1 * m.work_top_drive and wall[1] > 0.0
