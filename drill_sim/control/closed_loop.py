@@ -36,12 +36,11 @@ from ..session.rig_session import RigSession
 from ..session.scenario import due
 from ..session.scenario_player import checked_changes
 from ..wire import rig_topics
-from . import LAWS, make_law
+from . import LAWS
 from .evaluation import (
     LoopResult,
     LoopSettings,
     Scenario,
-    ideal_measurement,
     law_gains,
     law_top_drive,
     loop_result,
@@ -66,8 +65,7 @@ def session_parameters(preset: Preset, scenario: Scenario, settings: LoopSetting
     h = check_number("sample_period_s", settings.sample_period_s, high=1.0)
     drive = law_top_drive(preset, settings.law, settings.top_drive)
     speed_set, wob_kn = scenario.values(np.zeros(1))
-    start = speed_set[0] if scenario.start_rpm is None else check_number(
-        "start_rpm", scenario.start_rpm) * RPM
+    start = speed_set[0] if scenario.start_rpm is None else scenario.start_rpm * RPM  # checked
     p = {s.name: s.default for s in specs(preset)}
     p.update(publish_clock=True, max_speed=True, rate_hz=1.0 / h,
              string_model=settings.string_model, sensor_profile=settings.sensor_profile,
@@ -101,43 +99,42 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
     """Close the loop over the scenario (module docstring); ``record``: a new bag directory
     the session is recorded into, as the node records it."""
     preset = load_preset(preset) if isinstance(preset, str) else preset
-    h = check_number("sample_period_s", settings.sample_period_s, high=1.0)
+    p = session_parameters(preset, scenario, settings, Path(record) if record else None)
+    h = float(settings.sample_period_s)                # checked by session_parameters
     drive = law_top_drive(preset, settings.law, settings.top_drive)
     speed_set, hook = tick_commands(preset, scenario, h)
     n = speed_set.size - 1
-    p = session_parameters(preset, scenario, settings, Path(record) if record else None)
     check = partial(checked_change, {s.name: s for s in specs(preset)})
     checked_changes(scenario, p, check)                # every change, before anything runs
     session = RigSession(p, geometry=preset.string, preset=preset.name)
     session.set_live([False] * len(session.outputs))   # nobody subscribes offline
     commands = _Commands(session)
+    window_k = max(1, math.ceil(scenario.metrics_from_s / h - 1e-9))
     try:
         series = _close(session, commands, preset, scenario, settings, drive, h, n,
-                        speed_set, hook, progress, check)
+                        speed_set, hook, progress, check, window_k)
     finally:
         session.close()
-    window_k = max(1, math.ceil(scenario.metrics_from_s / h - 1e-9))
     return loop_result(preset, scenario, settings, drive, session.rig, series, window_k)
 
 
 def _close(session: RigSession, commands: _Commands, preset: Preset, scenario: Scenario,
            settings: LoopSettings, drive, h: float, n: int, speed_set: np.ndarray,
            hook: np.ndarray, progress: Callable[[float], None] | None,
-           check: Callable[[dict[str, object], dict[str, object]], dict[str, object]]
-           ) -> dict[str, np.ndarray]:
+           check: Callable[[dict[str, object], dict[str, object]], dict[str, object]],
+           window_k: int) -> dict[str, np.ndarray]:
     rig = session.rig
     measure = _measure(settings)
     gains = law_gains(settings, drive)
     z, j = pipe_impedance(preset), drive.top_drive_inertia_kg_m2
-    speed_law = LAWS[settings.law].output_kind == "speed"        # the kinematic pass-through
-    switch_k = 0 if speed_law else math.ceil(scenario.switch_on_s / h - 1e-9)
+    # the kinematic pass-through: its output is the set-point, Ω_set itself, every tick
+    speed_law = LAWS[settings.law].output_kind == "speed"
     session.emit(())                                  # the sample at t = 0, measured
     sample, reading = session.last[1], session.last[2]
     if speed_law:
-        law = make_law("kinematic", h, z, j, **gains)
-        law.reset(float(speed_set[0]))
-        output = law.bumpless_start(rig.commanded_speed_rad_s, measure(sample, reading))
+        output = rig.commanded_speed_rad_s             # bumpless: the speed the drive holds
     else:
+        switch_k = math.ceil(scenario.switch_on_s / h - 1e-9)
         first, first_gains = (settings.law, gains) if switch_k == 0 else (
             "stiff_pi", {"torque_min_nm": drive.motor_torque_min_nm,
                          "torque_max_nm": drive.motor_torque_max_nm})
@@ -146,7 +143,6 @@ def _close(session: RigSession, commands: _Commands, preset: Preset, scenario: S
         output = sup.step(measure(sample, reading))
     series = {k: np.empty(n + 1) for k in SERIES}
     _record(series, 0, sample, output)
-    window_k = max(1, math.ceil(scenario.metrics_from_s / h - 1e-9))
     every = max(1, n // 200)
     changes = list(scenario.changes)
     for k in range(1, n + 1):
@@ -160,15 +156,13 @@ def _close(session: RigSession, commands: _Commands, preset: Preset, scenario: S
         if k == window_k:
             rig.reset_metrics_window()
         sample, reading = session.last[1], session.last[2]
-        m = measure(sample, reading)
         if speed_law:
-            law.set_speed(float(speed_set[k]))
-            output = law.step(m)
+            output = float(speed_set[k])
         else:
             if k == switch_k:
                 sup.replace_law(settings.law, gains)      # bumpless: from the last output
             sup.set_speed(float(speed_set[k]))
-            output = sup.step(m)
+            output = sup.step(measure(sample, reading))
         _record(series, k, sample, output)
         if progress is not None and k % every == 0:
             progress(k / n)
@@ -176,13 +170,11 @@ def _close(session: RigSession, commands: _Commands, preset: Preset, scenario: S
 
 
 def _measure(settings: LoopSettings) -> Callable[[RigSample, Measured], SurfaceMeasurement]:
-    """What the law reads of a tick: a custom sensor's view of the sample, the ideal sensor's
-    (the sample itself), or the session's sensors' reading."""
+    """What the law reads of a tick: a custom sensor's view of the sample, or the session's
+    sensors' reading (under ``ideal``, the sample's own values)."""
     if settings.measure is not None:
         custom = settings.measure
         return lambda sample, reading: custom(sample)
-    if settings.sensor_profile == "ideal":
-        return lambda sample, reading: ideal_measurement(sample)
     return lambda sample, m: SurfaceMeasurement(sample.time_s, m.top_drive_speed_rad_s,
                                                 m.motor_torque_nm, m.surface_torque_nm)
 

@@ -59,10 +59,11 @@ class PI:
         self.torque_min_nm, self.torque_max_nm = check_limits(torque_min_nm, torque_max_nm)
         self.q_nm = 0.0
 
-    def load(self, output_nm: float, error_rad_s: float, feedforward_nm: float = 0.0) -> None:
-        """Set q so that ``output(error, feedforward)`` returns ``output_nm`` (if within limits)."""
+    def load(self, output_nm: float, error_rad_s: float) -> None:
+        """Set q so that ``output(error)`` (no feed-forward: the laws settle theirs to 0 when
+        they take over) returns ``output_nm`` (if within limits)."""
         gain = self.kp_nm_s_rad + self.ki_nm_rad * self.h_s
-        q = output_nm - feedforward_nm - gain * error_rad_s
+        q = output_nm - gain * error_rad_s
         self.q_nm = min(max(q, self.torque_min_nm), self.torque_max_nm)
 
     def output(self, error_rad_s: float, feedforward_nm: float = 0.0) -> float:
@@ -103,7 +104,7 @@ class Law:
         """Change Ω_set [rad/s]; takes effect on the next step."""
         self.speed_set_rad_s = check_number("speed_set_rad_s", speed_set_rad_s, low=None)
 
-    def reset(self, speed_set_rad_s: float = 0.0) -> None:
+    def reset(self, speed_set_rad_s: float) -> None:
         """Forget all state (integral, filters) and set Ω_set."""
         self.set_speed(speed_set_rad_s)
 
@@ -146,7 +147,7 @@ class Off(Law):
         super().__init__(h_s, impedance_nm_s_rad, top_drive_inertia_kg_m2)
         self.torque_nm = 0.0
 
-    def reset(self, speed_set_rad_s: float = 0.0) -> None:
+    def reset(self, speed_set_rad_s: float) -> None:
         super().reset(speed_set_rad_s)
         self.torque_nm = 0.0
 
@@ -179,7 +180,7 @@ class StiffPI(Law):
         ki = 5.0 * self.top_drive_inertia_kg_m2 if ki_nm_rad is None else ki_nm_rad
         self.pi = PI(self.h_s, kp, ki, torque_min_nm, torque_max_nm)
 
-    def reset(self, speed_set_rad_s: float = 0.0) -> None:
+    def reset(self, speed_set_rad_s: float) -> None:
         super().reset(speed_set_rad_s)
         self.pi.q_nm = 0.0
 
@@ -227,7 +228,7 @@ class SoftSpeed(Law):
         self.derivative = FilteredDerivative(derivative_corner_hz, self.h_s,
                                              name="derivative_corner_hz")
 
-    def reset(self, speed_set_rad_s: float = 0.0) -> None:
+    def reset(self, speed_set_rad_s: float) -> None:
         super().reset(speed_set_rad_s)
         self.pi.q_nm = 0.0
         self.derivative.settle(0.0)

@@ -36,8 +36,7 @@ class SampledLoop:
         slot[place] = value
         if None in slot:
             return None
-        del self._pending[stamp_ns]
-        for old in [s for s in self._pending if s < stamp_ns]:
+        for old in [s for s in self._pending if s <= stamp_ns]:   # this tick and older
             del self._pending[old]
         return slot  # type: ignore[return-value]
 

@@ -71,13 +71,13 @@ class Supervisor:
         self.last_output = out
         self.samples += 1
         limits = self.limits()
-        if limits is not None:
+        if limits is not None:                     # the law's PI and its limits
             low, high = limits
+            pi = self.law.pi                       # type: ignore[attr-defined]
             tol = 1e-9 * (high - low)
             if out >= high - tol or out <= low + tol:
                 self.saturated += 1
-            pi = getattr(self.law, "pi", None)
-            if pi is not None and (pi.q_nm >= high - tol or pi.q_nm <= low + tol):
+            if pi.q_nm >= high - tol or pi.q_nm <= low + tol:
                 self.wound_up += 1
         return out
 
@@ -104,10 +104,9 @@ def law_gain_defaults(law: str, impedance_nm_s_rad: float, top_drive_inertia_kg_
     out = {}
     for name in LAWS[law].GAINS:
         value = sig.parameters[name].default
-        if name == "kp_nm_s_rad" and value is None:
-            value = 50.0 * impedance_nm_s_rad
-        elif name == "ki_nm_rad" and value is None:
-            value = 5.0 * top_drive_inertia_kg_m2
+        if value is None:                          # K_p and K_i: left to Z and J_TD
+            value = {"kp_nm_s_rad": 50.0 * impedance_nm_s_rad,
+                     "ki_nm_rad": 5.0 * top_drive_inertia_kg_m2}[name]
         elif name == "torque_min_nm":
             value = -DEFAULT_TORQUE_LIMIT_NM
         elif name == "torque_max_nm":

@@ -117,21 +117,28 @@ def dominant_frequency_hz(series: np.ndarray | list[float], h_s: float, *,
 
     Linear trend removed (drilling torque drifts), Hann window, zero-padded to at least four
     times the length; the peak bin is refined by a parabola through the log-magnitudes of it
-    and its neighbours, which puts a clean tone within a few hundredths of a bin.
+    and its neighbours, which puts a clean tone within a thousandth of a padded bin. A series
+    without an oscillation about its trend is refused: it has no dominant frequency.
     """
     h_s = check_number("h_s", h_s)
     x = np.asarray(series, dtype=float)
-    if x.ndim != 1 or x.size < 16 or not np.all(np.isfinite(x)):
-        raise ParameterError(f"series: expected at least 16 finite samples, got shape {x.shape}")
+    finite = int(np.count_nonzero(np.isfinite(x))) if x.ndim == 1 else 0
+    if finite < 16 or finite < x.size:
+        raise ParameterError(f"series: expected at least 16 finite samples, got {finite} of "
+                             f"{x.size}")
     f_max = 0.5 / h_s if f_max_hz is None else check_number("f_max_hz", f_max_hz)
     f_min = check_number("f_min_hz", f_min_hz, low_inclusive=True)
     t = np.arange(x.size)
+    scale = float(np.abs(x).max())
     x = x - np.polyval(np.polyfit(t, x, 1), t)
+    if not float(np.abs(x).max()) > 1e-12 * scale:
+        raise ParameterError("series: no oscillation once its linear trend is removed: "
+                             "expected a torque that varies about its trend")
     n_fft = 1 << math.ceil(math.log2(4 * x.size))
     magnitude = np.abs(np.fft.rfft(x * np.hanning(x.size), n_fft))
     df = 1.0 / (n_fft * h_s)
     lo, hi = max(1, math.ceil(f_min / df)), min(magnitude.size - 2, int(f_max / df))
-    if hi <= lo:
+    if hi < lo:
         raise ParameterError(f"band {f_min:g}..{f_max:g} Hz holds no frequency bin of a "
                              f"{x.size * h_s:g} s record")
     k = lo + int(np.argmax(magnitude[lo:hi + 1]))

@@ -73,7 +73,7 @@ class ZTorque(Law):
         self.lowpass_torque = FirstOrderSection(torque_lowpass_hz, h, name="torque_lowpass_hz")
         period = check_number("measurement_period_s", measurement_period_s,
                               low_inclusive=True, high=MAX_MEASUREMENT_PERIOD_S)
-        n = max(1, round(period / h)) if period > 0.0 else 1
+        n = max(1, round(period / h))
         self.measurement_period_s = n * h        # whole samples; 0 given: every sample
         self.torque_window = SampleWindow(n)
         self.speed_window = SampleWindow(n)
@@ -81,7 +81,7 @@ class ZTorque(Law):
         self.speed_lag = HeldLag(torque_signal_tau_s, h, name="torque_signal_tau_s")
         self.torque_lag = HeldLag(speed_signal_tau_s, h, name="speed_signal_tau_s")
         self.highpass = FirstOrderSection(highpass_hz, h, highpass=True, name="highpass_hz")
-        self.lowpass_out = FirstOrderSection(torque_lowpass_hz, h, name="torque_lowpass_hz")
+        self.lowpass_out = FirstOrderSection(self.lowpass_torque.corner_hz, h)
         if self.highpass.corner_hz >= self.lowpass_torque.corner_hz:
             raise ParameterError(f"highpass_hz = {self.highpass.corner_hz!r} is out of range: "
                                  f"expected < torque_lowpass_hz = "
@@ -98,13 +98,13 @@ class ZTorque(Law):
         self.torque_window.settle(motor_torque_nm)
         self.highpass.settle(motor_torque_nm)
         self.lowpass_out.settle(0.0)
-        self.pipe_torque_estimate_nm = motor_torque_nm
-        self.torque_feedback_nm = 0.0
 
-    def reset(self, speed_set_rad_s: float = 0.0) -> None:
+    def reset(self, speed_set_rad_s: float) -> None:
         super().reset(speed_set_rad_s)
         self.pi.q_nm = 0.0
         self._settle(0.0, 0.0)
+        self.pipe_torque_estimate_nm = 0.0
+        self.torque_feedback_nm = 0.0
 
     def step(self, measurement: SurfaceMeasurement) -> float:
         speed = measurement.top_drive_speed_rad_s

@@ -3,6 +3,7 @@ commands pass the node's rules, and it starts as the node does (``initial_pertur
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
@@ -30,7 +31,12 @@ def test_a_recorded_loop_resimulates_exactly_and_holds_what_the_loop_saw(base, t
                                               sensor_seed=4), record=bag)
     result = resimulate(bag)
     assert result.exact, result.explanation()
+    assert result.preset == "base"                      # the session names its preset
     assert result.samples == 3001 and result.refused == 0
+    # the law takes over from the torque the drive holds (the steady start's), not from the
+    # noisy reading of it: stiff PI's first output is exactly the applied motor torque
+    assert r.series["law_output"][0] == pytest.approx(r.series["motor_torque_nm"][0],
+                                                      rel=1e-12)
     assert result.max_difference["measured top_drive_speed_rad_s"] == 0.0
     recorded = rig_series(bag)
     assert (recorded.bit_speed_rad_s == r.series["bit_speed_rad_s"]).all()
@@ -79,6 +85,7 @@ def test_a_scenarios_parameter_change_lands_on_its_tick_offline_and_replays(base
     k = 1500                                            # the tick at 1.5 s (h = 1 ms)
     wob_a, wob_b = a.series["wob_n"], b.series["wob_n"]
     assert (wob_a[:k + 1] == wob_b[:k + 1]).all()
+    assert wob_b[k + 1] != wob_a[k + 1]                 # from the step after that tick
     assert abs(wob_b[k + 2:] - wob_a[k + 2:]).max() > 1e3     # a harder rock: another weight
     result = resimulate(tmp_path / "harder")
     assert result.exact, result.explanation()
@@ -108,7 +115,19 @@ def test_the_evaluation_takes_the_rigs_shipped_scenarios_by_name():
         named(["no_such_set"])
 
 
-def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base, tmp_path):
+@pytest.mark.parametrize("suffix", [".yaml", ".yml"])
+def test_the_evaluation_takes_a_scenario_file(tmp_path, suffix):
+    import yaml
+
+    from drill_sim.control.scenarios import named
+    path = tmp_path / f"mine{suffix}"
+    path.write_text(yaml.safe_dump(YAML_SWITCH))
+    [mine] = named([str(path)])
+    assert (mine.duration_s, mine.switch_on_s) == (2.0, 1.0)
+
+
+@pytest.mark.parametrize("switch_on_s", [0.3, 0.0])
+def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base, tmp_path, switch_on_s):
     """The offline loop's semantics, computed independently on a bare ``Rig``: set-point and
     hook load k held over k..k+1, the motor torque answered to sample k applied over
     k..k+1, the drive's stiff loop until sample ceil(switch_on_s / h), then the law, bumpless;
@@ -120,9 +139,9 @@ def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base, tmp_path)
     from drill_sim.control.supervisor import Supervisor
     from drill_sim.control.tuning import pipe_impedance
     from drill_sim.session import rules
-    scenario = Scenario.of_points("ramps", ((0.0, 60.0), (0.1, 60.0), (0.9, 70.0)),
+    scenario = Scenario.of_points("ramps", ((0.0, 60.0), (0.9, 70.0)),
                                   ((0.0, 100.0), (0.2, 100.0), (0.8, 110.0)), duration_s=1.0,
-                                  window_start_s=0.6, switch_on_s=0.3)
+                                  window_start_s=0.6, switch_on_s=switch_on_s)
     settings = LoopSettings(law="z_torque")
     h = settings.sample_period_s
     result = run_loop(base, scenario, settings, record=tmp_path / "z")
@@ -132,14 +151,15 @@ def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base, tmp_path)
     rules.start(rig, p)
     speed, hook = tick_commands(base, scenario, h)
     drive = law_top_drive(base, "z_torque", None)
-    sup = Supervisor(h, pipe_impedance(base), drive.top_drive_inertia_kg_m2, "stiff_pi",
-                     {"torque_min_nm": drive.motor_torque_min_nm,
-                      "torque_max_nm": drive.motor_torque_max_nm},
+    first = ("stiff_pi", {"torque_min_nm": drive.motor_torque_min_nm,
+                          "torque_max_nm": drive.motor_torque_max_nm}) if switch_on_s else (
+        "z_torque", law_gains(settings, drive))
+    sup = Supervisor(h, pipe_impedance(base), drive.top_drive_inertia_kg_m2, *first,
                      speed_set_rad_s=float(speed[0]))
     sup.last_output = rig.commanded_motor_torque_nm
     out = sup.step(ideal_measurement(rig.sample()))
     steps = round(h / rig.dt_s)
-    bit, motor, law_out = [rig.sample().bit_speed_rad_s], [rig.sample().motor_torque_nm], [out]
+    samples, law_out = [rig.sample()], [out]
     for k in range(1, speed.size):
         rig.command(float(speed[k - 1]), float(hook[k - 1]))
         rig.command_motor_torque(out)
@@ -147,15 +167,15 @@ def test_the_loop_is_the_rig_ticked_by_hand_under_the_supervisor(base, tmp_path)
         if k == 600:
             rig.reset_metrics_window()
         s = rig.sample()
-        if k == 300:
+        if k == 300 and switch_on_s:
             sup.replace_law("z_torque", law_gains(settings, drive))
         sup.set_speed(float(speed[k]))
         out = sup.step(ideal_measurement(s))
-        bit.append(s.bit_speed_rad_s)
-        motor.append(s.motor_torque_nm)
+        samples.append(s)
         law_out.append(out)
-    assert list(result.series["bit_speed_rad_s"]) == bit
-    assert list(result.series["motor_torque_nm"]) == motor
+    for column in ("time_s", "bit_speed_rad_s", "top_drive_speed_rad_s", "surface_torque_nm",
+                   "motor_torque_nm", "stuck", "bit_depth_m", "top_drive_angle_rad", "wob_n"):
+        assert list(result.series[column]) == [float(getattr(x, column)) for x in samples], column
     assert list(result.series["law_output"]) == law_out
     # the result's figures, from the hand loop's own window (samples 600.., rpm = 2 pi/60)
     metrics, rpm = rig.metrics(), 2.0 * math.pi / 60.0
@@ -238,22 +258,23 @@ def test_the_loops_session_parameters_are_the_settings_and_the_scenarios(base):
     from drill_sim.core.top_drive import TopDriveParameters
     drive = TopDriveParameters(top_drive_inertia_kg_m2=1234.0, motor_torque_max_nm=5e4,
                                motor_torque_min_nm=-4e4, drive_kp_nm_s_rad=1e4)
-    scenario = Scenario.of_points("s", ((0.0, 60.0),), ((0.0, 90.0),), duration_s=2.0,
-                                  window_start_s=1.0, start_rpm=55.0)
+    scenario = dataclasses.replace(Scenario.of_points(
+        "s", ((0.0, 60.0),), ((0.0, 90.0),), duration_s=2.0, window_start_s=1.0,
+        start_rpm=55.0), initial_state="rest")
     settings = LoopSettings(law="z_torque", sample_period_s=2e-3, top_drive=drive,
                             string_model="distributed", sensor_profile="surface_rig",
                             sensor_seed=7, perturbation=0.01)
     p = session_parameters(base, scenario, settings)
     assert p["rate_hz"] == 500.0 and p["max_speed"] is True and p["publish_clock"] is True
     assert p["initial_top_drive_speed_rad_s"] == pytest.approx(55.0 * 2 * math.pi / 60)
-    assert p["initial_weight_on_bit_n"] == 90e3 and p["initial_state"] == "steady"
+    assert p["initial_weight_on_bit_n"] == 90e3 and p["initial_state"] == "rest"
     assert p["initial_perturbation"] == 0.01
     assert (p["string_model"], p["sensor_profile"], p["sensor_seed"]) == (
         "distributed", "surface_rig", 7)
     assert (p["top_drive_mode"], p["top_drive_inertia_kg_m2"], p["motor_torque_max_nm"],
             p["motor_torque_min_nm"]) == ("torque", 1234.0, 5e4, -4e4)
     assert p["motor_torque_rate_nm_s"] == 0.0            # the table's "no rate limit"
-    assert p["max_top_drive_speed_rad_s"] >= 40.0        # a set-point ramp up to 380 rpm
+    assert p["max_top_drive_speed_rad_s"] == 40.0        # a set-point ramp up to 380 rpm
     assert session_parameters(base, Scenario.steady(60.0, 90.0), settings)[
         "initial_top_drive_speed_rad_s"] == pytest.approx(60.0 * 2 * math.pi / 60)
     for bad in (0.0, 1.5, math.nan):
@@ -262,10 +283,86 @@ def test_the_loops_session_parameters_are_the_settings_and_the_scenarios(base):
                                                             sample_period_s=bad))
 
 
-@pytest.mark.parametrize(("duration_s", "every"), [(0.2, 1), (0.6, 3)])
+@pytest.mark.parametrize(("duration_s", "every"), [(0.2, 1), (0.6, 3), (0.7, 3)])
 def test_progress_is_the_fraction_done_about_200_times(base, duration_s, every):
     seen = []
     run_loop(base, Scenario.steady(60.0, 100.0, duration_s=duration_s, window_start_s=0.1),
              LoopSettings(law="kinematic"), progress=seen.append)
     n = round(duration_s / 1e-3)
     assert seen == [k / n for k in range(every, n + 1, every)]
+
+
+def test_the_ticks_commands_are_the_scenario_at_k_h(base):
+    """speed_ramp: 120 rpm to 10 s, 40 rpm at 40 s, 100 kN throughout; at 10 ms ticks, tick
+    2500 is 25 s (80 rpm). A weight of all of W_s is a hook load of 0, taken."""
+    from drill_sim.control.closed_loop import tick_commands
+    from drill_sim.control.scenarios import speed_ramp
+    rpm = 2 * math.pi / 60
+    speed, hook = tick_commands(base, speed_ramp(), 0.01)
+    assert speed.size == hook.size == 5001
+    assert speed[[0, 1000, 2500, 4000, 5000]] == pytest.approx(
+        [120 * rpm, 120 * rpm, 80 * rpm, 40 * rpm, 40 * rpm], rel=1e-12)
+    assert hook == pytest.approx(base.rig.submerged_weight_n - 100e3, rel=1e-12)
+    all_of_it = Scenario.steady(60.0, base.rig.submerged_weight_n / 1e3, duration_s=1.0,
+                                window_start_s=0.5)
+    assert tick_commands(base, all_of_it, 0.01)[1] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_the_loop_runs_the_distributed_string_of_its_preset(base):
+    """The session is built with the preset's pipe: the distributed string runs offline (a
+    torsional wave takes L/c = 1000 m / 3220 m/s = 0.31 s to reach the top, so a WOB step's
+    torque reaches the surface only after it)."""
+    step = Scenario.of_points("step", ((0.0, 60.0),), ((0.0, 100.0), (0.1, 130.0)),
+                              duration_s=0.6, window_start_s=0.3)
+    r = run_loop(base, step, LoopSettings(law="kinematic", string_model="distributed"))
+    assert r.string_model == "distributed"
+    torque, t = r.series["surface_torque_nm"], r.series["time_s"]
+    before = torque[t < 0.1].mean()
+    travel_s = base.string.pipe_length_m / math.sqrt(base.string.shear_modulus_pa
+                                                     / base.string.steel_density_kg_m3)
+    quiet = (t > 0.1) & (t < 0.1 + 0.9 * travel_s)
+    assert abs(torque[quiet] - before).max() < 0.01 * before
+    assert torque[-1] > 1.1 * before
+
+
+def test_a_custom_sensor_is_what_the_law_reads(base):
+    """``LoopSettings.measure``: the law reads what it returns. The ideal view returned gives
+    the plain loop bit for bit; a speed reading 0.5 rad/s high makes the stiff loop hold the
+    top drive 0.5 rad/s lower once its integral has settled (K_p/K_i ≈ 1 s)."""
+    from drill_sim.control.evaluation import ideal_measurement
+    scenario = Scenario.steady(60.0, 100.0, duration_s=1.0, window_start_s=0.5)
+    plain = run_loop(base, scenario, LoopSettings(law="stiff_pi"))
+    same = run_loop(base, scenario, LoopSettings(law="stiff_pi", measure=ideal_measurement))
+    assert list(same.series["law_output"]) == list(plain.series["law_output"])
+
+    def high(sample):
+        return ideal_measurement(sample)._replace(
+            top_drive_speed_rad_s=sample.top_drive_speed_rad_s + 0.5)
+    longer = Scenario.steady(60.0, 100.0, duration_s=4.0, window_start_s=2.0)
+    plain = run_loop(base, longer, LoopSettings(law="stiff_pi"))
+    biased = run_loop(base, longer, LoopSettings(law="stiff_pi", measure=high))
+    drop = plain.series["top_drive_speed_rad_s"][-100:] - biased.series[
+        "top_drive_speed_rad_s"][-100:]
+    assert drop.mean() == pytest.approx(0.5, rel=0.1)
+
+
+def test_a_held_torque_is_sent_once_and_the_window_may_start_at_the_first_tick(base, tmp_path):
+    """``off`` holds the drive's torque: its one value is in the bag once. A window from 0 s
+    covers every step: from the first tick on (the sample at 0 is the start, before any)."""
+    scenario = Scenario.steady(60.0, 100.0, duration_s=0.2, window_start_s=0.0)
+    r = run_loop(base, scenario, LoopSettings(law="off"), record=tmp_path / "off")
+    assert len(_commands_in_bag(tmp_path / "off", ("top_drive_torque",))[
+        "top_drive_torque"]) == 1
+    assert r.window_s == pytest.approx(0.199, abs=1e-9)
+
+
+def test_before_the_switch_the_drives_loop_has_the_drives_limits(base):
+    """Until the switch the drive's own stiff loop runs under the drive's torque limits: a
+    5 kN·m motor under a rising weight is held at 5 kN·m, not at the law's default 100."""
+    from dataclasses import replace
+    weak = replace(base.top_drive, motor_torque_max_nm=5000.0, motor_torque_min_nm=-5000.0)
+    heavier = Scenario.of_points("heavier", ((0.0, 60.0),), ((0.0, 80.0), (0.2, 160.0)),
+                                 duration_s=1.0, window_start_s=0.5, switch_on_s=0.9)
+    r = run_loop(base, heavier, LoopSettings(law="z_torque", top_drive=weak))
+    before = r.series["law_output"][:900]
+    assert before.max() == pytest.approx(5000.0, rel=1e-12)

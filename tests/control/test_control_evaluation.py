@@ -16,6 +16,7 @@ import pytest
 from drill_sim.control.closed_loop import run_loop
 from drill_sim.control.evaluation import LoopSettings, Scenario
 from drill_sim.control.reference import reference_gains
+from drill_sim.control.tuning import pipe_impedance
 from drill_sim.core import RPM, ParameterError, Rig, load_preset
 
 J_TD = 2900.0
@@ -176,6 +177,27 @@ def test_series_are_sampled_at_h(preset):
     assert len(t) == 101
     # k h exactly, to round-off: the session's step divides h (10 ms = 100 steps of 100 us)
     assert np.abs(t - np.arange(101) * 0.01).max() < 1e-12
+    assert r.surface_torque_rms_nm == pytest.approx(float(np.std(
+        r.series["surface_torque_nm"][50:])), rel=1e-12)
+
+
+def test_a_drive_too_weak_for_the_bit_is_saturated_and_a_bit_that_does_not_cut_has_no_mse(
+        preset):
+    """A motor limited to 5 kN·m, the weight raised from 80 to 160 kN (about 8 kN·m at the
+    bit): the law's output sits on the limit, and the saturated time is that fraction of the
+    window. Dropped to 20 kN (below the cutting threshold, ≈ 71 kN) the bit drills nothing:
+    MSE undefined (NaN), ROP 0."""
+    from dataclasses import replace
+    weak = replace(preset.top_drive, motor_torque_max_nm=5000.0, motor_torque_min_nm=-5000.0)
+    heavier = Scenario.of_points("heavier", ((0.0, 60.0),), ((0.0, 80.0), (0.2, 160.0)),
+                                 duration_s=1.0, window_start_s=0.5)
+    r = run_loop(preset, heavier, LoopSettings(law="stiff_pi", top_drive=weak))
+    assert r.saturation_fraction > 0.5
+    assert r.saturation_time_s == pytest.approx(r.saturation_fraction * r.window_s, rel=1e-12)
+    lifted = Scenario.of_points("lifted", ((0.0, 60.0),), ((0.0, 80.0), (0.1, 20.0)),
+                                duration_s=3.0, window_start_s=2.0)
+    idle = run_loop(preset, lifted, LoopSettings(law="kinematic"))
+    assert idle.mean_rop_m_h == 0.0 and math.isnan(idle.mse_pa)
 
 
 def test_metrics_of_a_recording_worked_by_hand():
@@ -194,9 +216,10 @@ def test_metrics_of_a_recording_worked_by_hand():
         "surface_torque_nm": np.array([0, 0, 0, 100, 300, 200, 200, 200, 200, 200], float),
         "top_drive_angle_rad": 0.5 * np.arange(10),
         "motor_torque_nm": np.array([0, 0, 0, 1000, -500, 1000, 10, 20, 30, 40], float),
-        "wob_n": np.array([0, 0, 0, 5e4, 7e4, 7e4, 7e4, 7e4, 7e4, 7e4], float),
+        "wob_n": np.array([0, 0, 0, 5e4, 6e4, 9e4, 7e4, 7e4, 7e4, 7e4], float),
     }
-    r = sample_metrics(preset, series, 0.3, drive, law="x", scenario="y")
+    r = sample_metrics(preset, series, 0.3, drive, law="x", scenario="y",
+                       sensor_profile="surface_rig", string_model="distributed")
     rpm = 2 * math.pi / 60
     assert r.ssi == pytest.approx(3.0 / (2 * 11 / 7))
     assert r.stick_fraction == pytest.approx(2 / 7)
@@ -211,8 +234,19 @@ def test_metrics_of_a_recording_worked_by_hand():
     assert r.saturation_time_s == pytest.approx(3 / 7 * 0.6)
     area = math.pi * preset.rig.bit_radius_m ** 2
     work = 0.5 * (100 + 300 + 200 * 4)               # torque k times the turn to k + 1
-    assert r.mse_pa == pytest.approx(7e4 / area + work / (area * 0.06))
-    assert (r.law, r.scenario) == ("x", "y")
+    # the WOB of the samples that end each turn interval (4..9), as the work is summed
+    assert r.mse_pa == pytest.approx((6e4 + 9e4 + 4 * 7e4) / 6 / area + work / (area * 0.06))
+    assert (r.law, r.scenario, r.sensor_profile, r.string_model) == (
+        "x", "y", "surface_rig", "distributed")
+    assert r.series.keys() == series.keys() and r.series["wob_n"] is series["wob_n"]
+    late = sample_metrics(preset, series, 0.5, drive, law="x", scenario="y")
+    assert (late.sensor_profile, late.string_model) == ("ideal", "lumped")   # the defaults
+    assert late.min_bit_speed_rpm == pytest.approx(2.0 / rpm)
+    last = sample_metrics(preset, series, 0.9, drive, law="x", scenario="y")
+    assert last.window_s == 0.0 and math.isnan(last.mean_rop_m_h) and math.isnan(last.mse_pa)
+    resting = sample_metrics(preset, {**series, "bit_depth_m": np.full(10, 10.0)}, 0.3, drive,
+                             law="x", scenario="y")
+    assert resting.mean_rop_m_h == 0.0 and math.isnan(resting.mse_pa)
     assert math.isnan(sample_metrics(preset, series, 0.3, None, law="x",
                                      scenario="y").saturation_fraction)
 
@@ -228,8 +262,9 @@ def test_the_scenario_set_is_the_documented_one():
         speed, wob = s.values(np.array([0.0, 39.0]))
         assert list(speed) == pytest.approx([r * RPM] * 2) and list(wob) == [w, w]
     [step] = named(["wob_step"])
-    _, wob = step.values(np.array([0.0, 20.0, 20.5, 21.0, 50.0]))
+    speed, wob = step.values(np.array([0.0, 20.0, 20.5, 21.0, 50.0]))
     assert list(wob) == pytest.approx([80, 80, 100, 120, 120])
+    assert list(speed / RPM) == pytest.approx([60] * 5)
     assert (step.duration_s, step.metrics_from_s) == (50.0, 25.0)
     [ramp] = named(["speed_ramp"])
     speed, wob = ramp.values(np.array([0.0, 10.0, 25.0, 40.0, 50.0]))
@@ -239,6 +274,7 @@ def test_the_scenario_set_is_the_documented_one():
     assert (on.switch_on_s, on.duration_s, on.metrics_from_s) == (20.0, 60.0, 35.0)
     speed, wob = on.values(np.array([0.0, 60.0]))
     assert list(speed / RPM) == pytest.approx([60, 60]) and list(wob) == [100.0, 100.0]
+    assert (step.name, ramp.name, on.name) == ("wob_step", "speed_ramp", "switch_on")
     assert [s.name for s in named(["standard"])] == [s.name for part in STANDARD
                                                        for s in named([part])]
 
@@ -260,13 +296,15 @@ def test_a_result_row_and_several_laws_on_one_scenario():
 def test_a_law_takes_the_drives_limits_unless_its_gains_set_them():
     from drill_sim.control.evaluation import build_law
     from drill_sim.core.top_drive import TopDriveParameters
-    drive = TopDriveParameters(motor_torque_max_nm=3e4, motor_torque_min_nm=-1e4)
+    drive = TopDriveParameters(motor_torque_max_nm=3e4, motor_torque_min_nm=-1e4,
+                               top_drive_inertia_kg_m2=1500.0)
     base = load_preset("base")
     law = build_law(base, LoopSettings(law="stiff_pi"), drive)
     assert (law.pi.torque_min_nm, law.pi.torque_max_nm) == (-1e4, 3e4)
     law = build_law(base, LoopSettings(law="stiff_pi", gains={"torque_max_nm": 5e3}), drive)
     assert (law.pi.torque_min_nm, law.pi.torque_max_nm) == (-1e4, 5e3)
-    assert law.h_s == 1e-3 and law.top_drive_inertia_kg_m2 == drive.top_drive_inertia_kg_m2
+    assert law.h_s == 1e-3 and law.top_drive_inertia_kg_m2 == 1500.0
+    assert law.impedance_nm_s_rad == pytest.approx(pipe_impedance(base), rel=1e-12)
     assert build_law(base, LoopSettings(law="kinematic"), drive).name == "kinematic"
 
 

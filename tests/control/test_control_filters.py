@@ -170,3 +170,69 @@ def test_a_steep_trend_is_removed_before_the_peak_is_sought():
     t = np.arange(6000) * h
     torque = 8000 + 5000 * t + 1000 * np.sin(2 * math.pi * 0.5 * t + 0.3)
     assert dominant_frequency_hz(torque, h) == pytest.approx(0.5, rel=0.01)
+
+
+def _padded_bin_hz(n: int, h: float) -> float:
+    """The spectrum's spacing [Hz] after padding n samples to the next power of two ≥ 4 n."""
+    return 1.0 / (2 ** math.ceil(math.log2(4 * n)) * h)
+
+
+@pytest.mark.parametrize("fraction", [0.0, 0.25, 0.5])
+def test_a_clean_tone_between_bins_is_found_to_a_thousandth_of_a_bin(fraction):
+    """Hann window, log-parabola refinement: a pure tone anywhere between two padded bins
+    (measured here: within 8e-4 of a bin) comes back to 2e-3 of a bin, at any amplitude
+    (the spectrum's scale drops out of the log-parabola)."""
+    h, n = 0.01, 1000
+    df = _padded_bin_hz(n, h)
+    f0 = 250 * df + fraction * df
+    tone = np.sin(2 * math.pi * f0 * np.arange(n) * h + 0.4)
+    for amplitude in (1.0, 1e-9):
+        assert abs(dominant_frequency_hz(amplitude * tone, h) - f0) < 2e-3 * df
+
+
+def test_the_band_is_the_one_asked_for():
+    """A strong tone below f_min and one above f_max are not the answer; the weaker tone
+    inside the band is."""
+    h, n = 0.01, 2000
+    t = np.arange(n) * h
+    x = 5 * np.sin(2 * math.pi * 1.0 * t) + np.sin(2 * math.pi * 4.0 * t) + 5 * np.sin(
+        2 * math.pi * 20.0 * t)
+    assert dominant_frequency_hz(x, h, f_min_hz=2.0, f_max_hz=10.0) == pytest.approx(4.0,
+                                                                                    abs=1e-3)
+    assert dominant_frequency_hz(x, h, f_max_hz=10.0) == pytest.approx(1.0, abs=1e-3)
+    assert dominant_frequency_hz(x, h, f_min_hz=2.0) == pytest.approx(20.0, abs=1e-3)
+
+
+def test_a_series_without_oscillation_is_refused():
+    for flat in (np.full(100, 3.0), 5.0 + 2.0 * np.arange(100.0)):
+        with pytest.raises(ValueError, match="no oscillation"):
+            dominant_frequency_hz(flat, 0.01)
+
+
+def test_the_band_takes_its_edges():
+    """A tone on the band's top bin is found there; a band of a single bin gives that bin."""
+    h, n = 0.01, 1000
+    df = _padded_bin_hz(n, h)
+    f0 = 300 * df
+    tone = np.sin(2 * math.pi * f0 * np.arange(n) * h + 0.2)
+    assert abs(dominant_frequency_hz(tone, h, f_max_hz=f0) - f0) < 2e-3 * df
+    assert abs(dominant_frequency_hz(tone, h, f_min_hz=f0, f_max_hz=f0) - f0) < 2e-3 * df
+
+
+def test_soft_speed_tuning_defaults_and_the_auto_tunes_band():
+    """tune_soft_speed with nothing given: k_p 4, f_t 0.2 Hz, J_c 0 (msg_docs/control.md).
+    The auto-tune looks from f_min to 5 Hz by default: a stronger line at 5.5 Hz is outside,
+    one at 1 Hz below f_min = 2 Hz too; the gains given pass through."""
+    from drill_sim.control import tune_soft_speed
+    gains = tune_soft_speed(302.0, 2900.0)
+    assert gains == pytest.approx((4 * 302.0, (2 * math.pi * 0.2) ** 2 * 2900.0, 0.2, 0.0),
+                                  rel=1e-12)
+    h = 0.01
+    t = np.arange(6000) * h
+    torque = (9000 + 800 * np.sin(2 * math.pi * 1.0 * t) + 500 * np.sin(2 * math.pi * 3.0 * t)
+              + 1500 * np.sin(2 * math.pi * 5.5 * t))
+    assert auto_tune_soft_speed(torque, h, 302.0, 2900.0).tuning_frequency_hz == (
+        pytest.approx(1.0, abs=1e-3))
+    tuned = auto_tune_soft_speed(torque, h, 302.0, 2900.0, f_min_hz=2.0, kp_over_impedance=2.0)
+    assert tuned.tuning_frequency_hz == pytest.approx(3.0, abs=1e-3)
+    assert tuned.kp_nm_s_rad == pytest.approx(2 * 302.0, rel=1e-12)

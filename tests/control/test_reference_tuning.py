@@ -1,0 +1,76 @@
+"""The reference tunings (``control.reference``) against their rules in msg_docs/control.md,
+computed here from the rig's parameters: f₁ of the string model the law runs on, Z-Torque's
+K_p = max(50 Z, 6 J_TD ω₁), and the signals' periods, lags and noise read off the profile."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+
+from drill_sim.control.reference import reference_gains, signal_alignment
+from drill_sim.control.tuning import first_mode_frequency_hz, pipe_impedance
+from drill_sim.core.presets import load_preset
+from drill_sim.core.sensor_profile import ChannelSpec, load_profile
+
+J = 2900.0
+
+
+@pytest.fixture(scope="module")
+def base():
+    return load_preset("base")
+
+
+def _lumped_f1_hz(preset, j: float) -> float:
+    c, i = preset.rig.torsional_stiffness_nm_per_rad, preset.rig.bha_inertia_kg_m2
+    return math.sqrt(c * (1.0 / i + 1.0 / j)) / (2.0 * math.pi)
+
+
+def test_soft_speed_is_tuned_at_the_first_mode_of_its_string_model(base):
+    f1 = _lumped_f1_hz(base, J)
+    assert reference_gains("soft_speed", base, J) == pytest.approx(
+        {"tuning_frequency_hz": f1, "compensated_inertia_kg_m2": 0.95 * J,
+         "derivative_corner_hz": 25.0 * f1}, rel=1e-12)
+    waves = reference_gains("soft_speed", base, J, string_model="distributed")
+    f1_waves = first_mode_frequency_hz(base, J, string_model="distributed")
+    assert waves["tuning_frequency_hz"] == pytest.approx(f1_waves, rel=1e-12)
+    assert f1_waves < 0.9 * f1                     # the pipe's own inertia: a different tuning
+
+
+def test_z_torques_gain_is_the_larger_of_50_z_and_six_j_omega(base):
+    z = pipe_impedance(base)
+    stiff = reference_gains("z_torque", base, J)
+    assert stiff == pytest.approx({"kp_nm_s_rad": 6.0 * J * 2 * math.pi * _lumped_f1_hz(base, J),
+                                   "alpha": 0.5}, rel=1e-12)
+    light = 20.0                                    # a light drive: 50 Z is the larger
+    assert reference_gains("z_torque", base, light)["kp_nm_s_rad"] == pytest.approx(50.0 * z,
+                                                                                     rel=1e-12)
+    assert reference_gains("stiff_pi", base, J) == {} == reference_gains("kinematic", base, J)
+
+
+def test_z_torque_is_told_what_its_signals_are(base):
+    """surface_rig: speed and motor torque at 100 Hz, the torque through a 5 ms lag, the speed
+    noisy: period 0.01 s, torque_signal_tau_s 0.005, the torque low-pass down to 2 f₁."""
+    f1 = _lumped_f1_hz(base, J)
+    gains = reference_gains("z_torque", base, J, sensor_profile="surface_rig")
+    assert {k: v for k, v in gains.items() if k not in ("kp_nm_s_rad", "alpha")} == (
+        pytest.approx({"measurement_period_s": 0.01, "torque_signal_tau_s": 0.005,
+                       "torque_lowpass_hz": 2.0 * f1}, rel=1e-12))
+    assert signal_alignment("ideal", f1) == {} == signal_alignment(None, f1)
+
+
+def test_the_alignment_reads_each_property_of_the_signals():
+    """A profile given as an object; each property present only where the profile has it:
+    the slower of the two rates, each signal's own lag, the low-pass only for a noisy speed."""
+    ideal = load_profile("ideal")
+    channels = dict(ideal.channels)
+    channels["top_drive_speed_rad_s"] = ChannelSpec(rate_hz=0.5, filter_tau_s=0.02)
+    channels["motor_torque_nm"] = ChannelSpec(rate_hz=2.0, filter_tau_s=0.5, noise_std=3.0)
+    profile = dataclasses.replace(ideal, channels=channels)
+    assert signal_alignment(profile, 0.7) == {"measurement_period_s": 2.0,
+                                              "torque_signal_tau_s": 0.5,
+                                              "speed_signal_tau_s": 0.02}
+    channels["top_drive_speed_rad_s"] = ChannelSpec(noise_std=0.5)
+    channels["motor_torque_nm"] = ChannelSpec()
+    assert signal_alignment(profile, 0.7) == {"torque_lowpass_hz": 1.4}
