@@ -33,6 +33,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "Delta_d(s), the string's natural frequencies and its damped modes "
                              "off bottom with the top drive's boundary; default: the preset's")
     add_drive_arguments(parser)
+    parser.add_argument("--law", choices=("stiff_pi", "soft_speed", "z_torque", "off"),
+                        default=None,
+                        help="with --string-model distributed: the damped modes with this law "
+                             "(its reference gains for the preset's distributed string) on the "
+                             "top drive's inertia, instead of the drive's own loop: the "
+                             "closed-loop roots, each mode's frequency and growth rate")
+    parser.add_argument("--sample-period", type=number, default=None,
+                        help="with --law: the law's sample period [s], 1e-4 to 0.1; default "
+                             "0.001 (the node's tick, as drill_sim control)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -54,6 +63,12 @@ def run(args: argparse.Namespace) -> int:
             print(str(exc))
         return 0
     model = args.string_model or (case.preset.string_model if case.si else "lumped")
+    if model != "distributed":
+        for option in ("law", "sample_period"):
+            if getattr(args, option) is not None:
+                raise UsageError(f"--{option.replace('_', '-')}: the closed-loop roots are the "
+                                 "distributed string's; expected it with --string-model "
+                                 "distributed")
     if model == "distributed":
         return run_distributed(args, case, steady, re_min)
     drive_options = [a for a in vars(args) if a.startswith(("top_drive", "drive_", "motor_"))

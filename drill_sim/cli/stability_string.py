@@ -8,11 +8,16 @@ from __future__ import annotations
 import argparse
 import math
 
+from ..control import make_law
+from ..control.evaluation import DEFAULT_SAMPLE_PERIOD_S
+from ..control.impedance import top_boundary
+from ..control.reference import reference_gains
+from ..control.tuning import pipe_impedance
 from ..core import DEFAULT_DT, ParameterError, SteadyState
 from ..core.distributed import geometry_waves
 from ..core.stability_distributed import natural_frequencies, string_modes, string_stability
 from .case import Case
-from .checks import json_line
+from .checks import in_range, json_line
 from .errors import UsageError
 from .single import resolve_drive, string_waves
 
@@ -41,14 +46,15 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
     tors, axial = natural_frequencies(waves, case.groups.psi, count=TORSIONAL_MODES)
     hz = 1.0 / (2.0 * math.pi * t_star)
     roots = [[float(r.real), float(r.imag)] for r in res.roots]
+    top, boundary, law_gains = _law_boundary(args, case, drive)
     try:
         damped = string_modes(waves, case.groups.psi,
                               drive.top_drive.groups(rig.scales, rig.bha_inertia_kg_m2),
-                              count=DAMPED_MODES)
+                              count=DAMPED_MODES, top=top)
     except ParameterError as exc:
         raise UsageError(f"--string-model distributed, the damped modes: {exc}") from None
     modes = [{"kind": m.kind, "frequency_hz": m.frequency * hz,
-              "damping_ratio": m.damping_ratio}
+              "damping_ratio": m.damping_ratio, "growth_rate_per_s": m.root.real / t_star}
              for m in (*damped.torsional, *damped.axial)]
     out = {"steady_drilling": True, "string_model": "distributed", "w0": case.w0,
            "omega0": case.omega0, "delta_n0": steady.delta_n0, "v0": steady.v0, "t0": steady.t0,
@@ -60,8 +66,7 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
            "torsional_frequencies_hz": [float(f * hz) for f in tors],
            "axial_frequencies_hz": [float(f * hz) for f in axial[:AXIAL_MODES]],
            "modes": modes, "modes_complete": damped.complete,
-           "modes_boundary": f"bit off bottom, hook force held, top drive "
-                             f"{drive.top_drive.top_drive_mode}",
+           "modes_boundary": boundary, **law_gains,
            "units": "dimensionless: s in 1/t*, v0 in L*/t*, t0 in C, delta_n0 in L*; "
                     "frequencies in Hz (modes: the damped frequency Im s / 2 pi, damping ratio "
                     "-Re s / |s|)", "t_star_s": t_star}
@@ -88,3 +93,30 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
         print(f"  {kind:9} " + ", ".join(f"{m['frequency_hz']:.3f} / {100 * m['damping_ratio']:.2f}"
                                         for m in modes if m["kind"] == kind))
     return 0
+
+
+def _law_boundary(args: argparse.Namespace, case: Case, drive) -> tuple[object, str, dict]:
+    """The top boundary of the modes: the drive's own (None) or ``--law``'s, linearised
+    (``control.impedance``) in the string's units; its words; the law's gains for the JSON."""
+    td = drive.top_drive
+    if args.law is None:
+        if args.sample_period is not None:
+            raise UsageError("--sample-period: the law's sample period; expected it with --law")
+        return None, f"bit off bottom, hook force held, top drive {td.top_drive_mode}", {}
+    h = DEFAULT_SAMPLE_PERIOD_S if args.sample_period is None else in_range(
+        "--sample-period", args.sample_period, 1e-4, 0.1, unit="s")
+    preset = case.preset
+    gains = reference_gains(args.law, preset, td.top_drive_inertia_kg_m2,
+                            string_model="distributed")
+    law = make_law(args.law, h, pipe_impedance(preset), td.top_drive_inertia_kg_m2, **gains)
+    boundary_si = top_boundary(law, td.drive_lag_s)
+    t_star = preset.rig.scales.time_s
+    c_unit = preset.rig.scales.stiffness_nm_per_rad
+
+    def top(s):
+        k, lag = boundary_si(s / t_star)
+        return k / c_unit, lag
+    words = (f"bit off bottom, hook force held, law {args.law} (reference gains for the "
+             f"distributed string, h = {h:g} s) on the top drive's inertia "
+             f"{td.top_drive_inertia_kg_m2:g} kg m^2")
+    return top, words, {"law": args.law, "law_gains": gains, "sample_period_s": h}

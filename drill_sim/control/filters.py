@@ -75,6 +75,15 @@ class FilteredDerivative:
         self._hpf = FirstOrderSection(corner_hz, h_s, highpass=True, name=name)
         self._wc = 2.0 * math.pi * self._hpf.corner_hz
 
+    @property
+    def corner_hz(self) -> float:
+        return self._hpf.corner_hz
+
+    @property
+    def section(self) -> FirstOrderSection:
+        """The high-pass section the derivative is ωc times."""
+        return self._hpf
+
     def settle(self, x: float) -> None:
         """Steady state at a constant ``x``: derivative zero."""
         self._hpf.settle(x)

@@ -19,6 +19,7 @@ im_max are not sought (the default box holds every mode below ~3 Hz on base).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -201,7 +202,8 @@ def top_stiffness(drive: DriveGroups, s: np.ndarray) -> np.ndarray | None:
     return k
 
 
-def string_modes(waves: StringWaves, psi: float, drive: DriveGroups, count: int = 5
+def string_modes(waves: StringWaves, psi: float, drive: DriveGroups, count: int = 5, *,
+                 top: Callable[[complex], tuple[complex, complex]] | None = None
                  ) -> StringModes:
     """The string's damped modes off bottom (bit free, hook force held) with ``drive`` at the
     top: roots in Im s > 0 of the torsional s^2 (L m11 - K m12) - (L m21 - K m22) (K, L =
@@ -209,13 +211,18 @@ def string_modes(waves: StringWaves, psi: float, drive: DriveGroups, count: int 
     from ``waves``' transfer matrices (build them ``continuous`` for the exact damped pipe).
     The box for each family reaches (count + 1) pi over the travel time along the pipe, above
     the count-th mode for any top between held and free, and left to -that (damping ratios
-    up to ~0.7) or to half way to the material's branch point -1/eta."""
+    up to ~0.7) or to half way to the material's branch point -1/eta. ``top``: another top
+    boundary instead of the drive's, s [1/t*] -> (K, L) in units of C, K/L the top's dynamic
+    stiffness (a control law at the top, ``control.impedance``), analytic in the box."""
     def f_t(s):
         m11, m12, m21, m22 = waves.torsion.transfer(s)
-        k = top_stiffness(drive, s)
-        if k is None:
-            return s * s * m12 - m22
-        lag = 1.0 + drive.lag * s
+        if top is not None:
+            k, lag = top(s)
+        else:
+            k = top_stiffness(drive, s)
+            if k is None:
+                return s * s * m12 - m22
+            lag = 1.0 + drive.lag * s
         return s * s * (lag * m11 - k * m12) - (lag * m21 - k * m22)
 
     def f_a(s):

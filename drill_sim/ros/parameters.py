@@ -72,7 +72,8 @@ def declare(node: Node) -> tuple[Preset, dict[str, Spec], dict[str, object]]:
                              "shallow, deep) or a preset YAML file")
     preset = load_preset(name)
     node.set_descriptor("preset", ParameterDescriptor(
-        description="preset name (base, shallow, deep, long) or preset YAML file", read_only=True,
+        description="preset name (base, shallow, deep, long, field_a) or preset YAML file",
+        read_only=True,
         type=ParameterType.PARAMETER_STRING, additional_constraints=PRESET_READ_ONLY))
     by_name = {s.name: s for s in specs(preset)}
     values: dict[str, object] = {}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 
 import pytest
@@ -117,3 +118,26 @@ def test_simulate_distributed_with_the_top_drive_in_the_loop():
                             "--motor-torque-knm", "5").stdout)
     assert torque["mean_motor_torque"] == pytest.approx(5e3, rel=1e-9)
     assert torque["mean_top_drive_speed"] > 0.0
+
+
+def test_stability_with_a_law_at_the_top_gives_the_closed_loop_roots():
+    """``--law``: the law's reference gains and sample period in the JSON, the boundary named,
+    each mode's growth rate Re s [1/s] = −ζ ω; SoftSpeed's first mode far better damped than
+    the drive with its motor torque held; ``--law`` and ``--sample-period`` refused where they
+    do nothing."""
+    soft = json.loads(run("stability", "--string-model", "distributed", "--json", "--law",
+                          "soft_speed", "--sample-period", "0.01").stdout)
+    held = json.loads(run("stability", "--string-model", "distributed", "--json",
+                          "--top-drive-mode", "torque").stdout)
+    assert (soft["law"], soft["sample_period_s"]) == ("soft_speed", 0.01)
+    assert soft["law_gains"]["compensated_inertia_kg_m2"] == pytest.approx(0.95 * 2900.0)
+    assert "law soft_speed" in soft["modes_boundary"] and soft["modes_complete"]
+    for m in soft["modes"]:
+        omega = 2 * math.pi * m["frequency_hz"] / math.sqrt(1.0 - m["damping_ratio"] ** 2)
+        assert m["growth_rate_per_s"] == pytest.approx(-m["damping_ratio"] * omega, rel=1e-6)
+    assert soft["modes"][0]["damping_ratio"] > 5 * held["modes"][0]["damping_ratio"]
+    for args, words in ((("--law", "z_torque"), "--law"),
+                        (("--string-model", "distributed", "--sample-period", "0.01"),
+                         "--sample-period")):
+        refused = run("stability", *args, check=False)
+        assert refused.returncode == 2 and words in refused.stderr

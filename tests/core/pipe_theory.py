@@ -53,13 +53,20 @@ def area_m2(od_m: float, id_m: float) -> float:
 def pipe(kind: str, preset, geometry=None, young_modulus_pa: float = YOUNG_MODULUS_PA) -> Pipe:
     """The preset's pipe (``geometry``: another one, e.g. with damping) as torsion or axial."""
     g = geometry if geometry is not None else preset.string
-    rho = g.steel_density_kg_m3
+    rho, shear = g.steel_density_kg_m3, g.shear_modulus_pa
+    od, inner, length = g.pipe_od_m, g.pipe_id_m, g.pipe_length_m
+    if g.sections:                      # one section of pipe over the BHA's (field_a)
+        [top] = [x for x in g.sections if not x.bha]
+        od, inner, length = top.od_m, top.id_m, top.length_m
+        rho = top.steel_density_kg_m3 or rho
+        shear = top.shear_modulus_pa or shear
+        young_modulus_pa = top.young_modulus_pa or young_modulus_pa
     if kind == "torsion":
-        j = polar_moment_m4(g.pipe_od_m, g.pipe_id_m)
-        return Pipe(rho * j, g.shear_modulus_pa * j, g.torsional_damping_nm_s_per_rad_m,
-                    g.pipe_length_m, preset.rig.bha_inertia_kg_m2, g.torsional_retardation_time_s)
-    a = area_m2(g.pipe_od_m, g.pipe_id_m)
-    return Pipe(rho * a, young_modulus_pa * a, g.axial_damping_n_s_per_m2, g.pipe_length_m,
+        j = polar_moment_m4(od, inner)
+        return Pipe(rho * j, shear * j, g.torsional_damping_nm_s_per_rad_m, length,
+                    preset.rig.bha_inertia_kg_m2, g.torsional_retardation_time_s)
+    a = area_m2(od, inner)
+    return Pipe(rho * a, young_modulus_pa * a, g.axial_damping_n_s_per_m2, length,
                 preset.rig.bha_mass_kg, g.axial_retardation_time_s)
 
 
@@ -159,9 +166,10 @@ def damped_roots(kind: str, p: Pipe, count: int, top=None) -> list[complex]:
     roots: list[complex] = []
     for w in starts:
         s = complex(-1e-3 * w, w)
-        for _ in range(100):
-            d = 1e-7 * abs(s)
-            s = s - f(s) / ((f(s + d) - f(s - d)) / (2 * d))
+        with np.errstate(over="ignore", invalid="ignore"):   # a start that runs off: dropped
+            for _ in range(100):
+                d = 1e-7 * abs(s)
+                s = s - f(s) / ((f(s + d) - f(s - d)) / (2 * d))
         if (np.isfinite(s) and s.imag > 1e-3 * held[0]
                 and abs(f(s)) < 1e-9 * abs(f(complex(0.0, abs(s))))
                 and all(abs(s - r) > 1e-6 * abs(s) for r in roots)):

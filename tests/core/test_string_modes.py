@@ -23,7 +23,7 @@ from drill_sim.core.stability_distributed import string_modes
 from drill_sim.core.top_drive import DriveGroups
 
 H = 5e-4
-PRESETS = ("base", "deep", "shallow", "long")
+PRESETS = ("base", "deep", "shallow", "long", "field_a")
 
 
 def _drive(p, mode: str, lag_s: float = 0.0):

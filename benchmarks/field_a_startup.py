@@ -1,0 +1,60 @@
+"""The off-bottom start-up of ``field_a`` (msg_docs/model.md, "Field presets"): for each speed
+set-point, the string from rest 5 cm off bottom, the hook holding all of it, the set-point
+ramped from 0 in 10 s and held; prints when the bit breaks free, the peak surface torque, how
+often the bit sticks again after that, and its speed range over the last 30 s.
+
+Run: .venv/bin/python benchmarks/field_a_startup.py [--rpm 10 20 30 60 90] [--seconds 60]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+
+from drill_sim.core.presets import load_preset
+from drill_sim.core.rig import Rig
+
+RPM = 2.0 * math.pi / 60.0
+SAMPLE_S = 0.01
+
+
+def start_up(rpm: float, seconds: float, ramp_s: float = 10.0) -> dict[str, np.ndarray]:
+    preset = load_preset("field_a")
+    rig = Rig(preset.rig, 1e-4, top_drive=preset.top_drive, string_model="distributed",
+              geometry=preset.string)
+    rig.start_at_rest(0.05)
+    n = round(seconds / SAMPLE_S)
+    out = {k: np.empty(n) for k in ("t", "bit", "torque")}
+    for k in range(n):
+        t = (k + 1) * SAMPLE_S
+        rig.command(min(t / ramp_s, 1.0) * rpm * RPM, preset.rig.submerged_weight_n)
+        rig.advance_to(t)
+        s = rig.sample()
+        out["t"][k], out["bit"][k], out["torque"][k] = t, s.bit_speed_rad_s, s.surface_torque_nm
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rpm", type=float, nargs="+", default=[10, 20, 30, 60, 90])
+    parser.add_argument("--seconds", type=float, default=60.0)
+    args = parser.parse_args()
+    print("set-point [rpm] | bit free at [s] | peak surface torque [kN m] | sticks again | "
+          "last 30 s bit speed [rad/s] | real-time factor")
+    for rpm in args.rpm:
+        began = time.perf_counter()
+        run = start_up(rpm, args.seconds)
+        rtf = args.seconds / (time.perf_counter() - began)
+        moving = run["bit"] > 1e-6
+        free = int(np.argmax(run["bit"] > 1e-3))
+        again = int(np.sum(np.diff(moving[free:].astype(int)) == -1))
+        late = run["t"] > args.seconds - 30.0
+        print(f"{rpm:g} | {run['t'][free]:.1f} | {run['torque'].max() / 1e3:.1f} | {again} | "
+              f"{run['bit'][late].min():.2f} to {run['bit'][late].max():.2f} | {rtf:.0f}")
+
+
+if __name__ == "__main__":
+    main()
