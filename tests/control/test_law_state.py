@@ -74,7 +74,7 @@ BUILT = {
                  "pi.torque_min_nm": -1e5, "pi.torque_max_nm": 1e5},
     "soft_speed": {"pi.kp_nm_s_rad": 4 * Z, "pi.ki_nm_rad": (2 * math.pi * 0.2) ** 2 * J,
                    "tuning_frequency_hz": 0.2, "compensated_inertia_kg_m2": 0.0,
-                   "derivative._hpf.corner_hz": 5.0},
+                   "derivative.corner_hz": 5.0},
     "z_torque": {"alpha": 0.25, "pi.kp_nm_s_rad": 50 * Z, "pi.ki_nm_rad": 5 * J,
                  "lowpass_speed.corner_hz": 10.0, "lowpass_torque.corner_hz": 2.5,
                  "lowpass_out.corner_hz": 2.5, "highpass.corner_hz": 0.05,
