@@ -31,6 +31,14 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
                     re_min: float) -> int:
     """Print (or --json) the distributed string's stability at ``case``."""
     string_waves(case, "distributed", DEFAULT_DT)   # UsageError in groups mode, no geometry
+    if args.law is not None:
+        # the law commands the motor torque: the drive in torque mode, its own loop unused
+        for option in ("top_drive_mode", "drive_kp", "drive_ki", "motor_torque_knm"):
+            if getattr(args, option) is not None:
+                raise UsageError(f"--{option.replace('_', '-')} with --law: the law commands "
+                                 "the motor torque of the drive (torque mode); expected the "
+                                 "drive's inertia, limits and lag only")
+        args.top_drive_mode = "torque"
     drive = resolve_drive(args, case)
     assert drive is not None                            # SI mode
     rig = case.preset.rig
@@ -92,6 +100,10 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
     for kind in ("torsional", "axial"):
         print(f"  {kind:9} " + ", ".join(f"{m['frequency_hz']:.3f} / {100 * m['damping_ratio']:.2f}"
                                         for m in modes if m["kind"] == kind))
+    if args.law is not None:
+        print(f"  these are the closed loop's with {args.law} at the top (a root of the law's own "
+              "filters may be among them); the roots of Delta_d above are on bottom with the "
+              "top held: the bit's own stability, not the law's")
     return 0
 
 
@@ -116,7 +128,9 @@ def _law_boundary(args: argparse.Namespace, case: Case, drive) -> tuple[object, 
     def top(s):
         k, lag = boundary_si(s / t_star)
         return k / c_unit, lag
-    words = (f"bit off bottom, hook force held, law {args.law} (reference gains for the "
-             f"distributed string, h = {h:g} s) on the top drive's inertia "
-             f"{td.top_drive_inertia_kg_m2:g} kg m^2")
+    inertia = f"the top drive's inertia {td.top_drive_inertia_kg_m2:g} kg m^2"
+    words = (f"bit off bottom, hook force held, law off: the motor torque held on {inertia}"
+             if args.law == "off" else
+             f"bit off bottom, hook force held, law {args.law} (reference gains for the "
+             f"distributed string, h = {h:g} s) on {inertia}")
     return top, words, {"law": args.law, "law_gains": gains, "sample_period_s": h}

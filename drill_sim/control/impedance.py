@@ -12,15 +12,19 @@ The law is the sampled one: each of its filters, its PI (rectangle rule), its wi
 lags by its own difference equation, evaluated at z = e^{sh}; its command held over the sample
 (the hold's (1 − e^{−sh})/(sh)) and through the drive's lag 1/(1 + lag s). The motor torque a
 law reads at a sample is the command of the sample before (z⁻¹). What this leaves out is
-aliasing (the sampled response's images above the Nyquist frequency), small below it. With
-C(z) the PI, H the hold and lag:
+aliasing (the sampled response's images above the Nyquist frequency), small below it. Each law
+answers the speed and the motor torque it reads, T_cmd = A Ω + B T_m (``law_responses``), with
+C(z) its PI:
 
-- stiff PI: Y = H C.
-- SoftSpeed: Y = H (C − J_c D(z)), D its filtered derivative.
-- Z-Torque: the pipe torque estimated from the motor torque's window mean E T_cmd and the
-  speed's slope over the window B Ω, filtered by G (low-pass, high-pass, low-pass), fed back
+- stiff PI: A = −C, B = 0.
+- SoftSpeed: A = −(C − J_c D(z)), D its filtered derivative; B = 0.
+- Z-Torque: the pipe torque estimated from the motor torque's window mean M T_m and the
+  speed's slope over the window S Ω, filtered by G (low-pass, high-pass, low-pass), fed back
   with a = α/Z into the set-point the PI follows through its speed filter L_Ω:
-  T_cmd = C (−L_Ω Ω − a G (E T_cmd − B Ω)), so Y = H C (L_Ω − a G B)/(1 + a C G E).
+  A = −C (L_Ω − a G S), B = −C a G M.
+
+With T_m = z⁻¹ T_cmd/(1 + lag s) and the top's torque the command held and lagged, H T_cmd:
+Z_top = J s − H A/(1 − B z⁻¹/(1 + lag s)).
 """
 
 from __future__ import annotations
@@ -45,52 +49,55 @@ def section_response(section: FirstOrderSection, zi: Complex) -> Complex:
 def lag_response(lag: HeldLag, zi: Complex) -> Complex:
     """y_k = x_{k-1} + (y_{k-1} − x_{k-1}) d: (1 − d) z⁻¹/(1 − d z⁻¹); τ = 0: 1."""
     if lag.tau_s == 0.0:
-        return 1.0 + 0.0 * zi
+        return np.ones_like(zi)
     return (1.0 - lag.decay) * zi / (1.0 - lag.decay * zi)
+
+
+def _check_modelled(law: Law) -> None:
+    if not isinstance(law, (Off, StiffPI, SoftSpeed, ZTorque)):
+        raise ValueError(f"law {law.name!r}: no linear model of its top boundary")
+
+
+def law_responses(law: Law, zi: Complex) -> tuple[Complex, Complex]:
+    """(A, B) at z⁻¹ = ``zi``: the sampled law's command per unit of the top speed it reads
+    and per unit of the motor torque it reads, T_cmd = A Ω + B T_m (``off``: none)."""
+    _check_modelled(law)
+    if isinstance(law, Off):
+        return 0.0, 0.0
+    h, pi = law.h_s, law.pi                          # type: ignore[attr-defined]
+    c = pi.kp_nm_s_rad + pi.ki_nm_rad * h / (1.0 - zi)
+    if isinstance(law, StiffPI):
+        return -c, 0.0
+    if isinstance(law, SoftSpeed):
+        d = law.derivative.corner_hz * 2.0 * np.pi * section_response(law.derivative.section, zi)
+        return -(c - law.compensated_inertia_kg_m2 * d), 0.0
+    a = law.alpha / law.impedance_nm_s_rad
+    n = law.torque_window.n
+    g = (section_response(law.lowpass_out, zi) * section_response(law.highpass, zi)
+         * section_response(law.lowpass_torque, zi))
+    mean = (1.0 - zi**n) / (n * (1.0 - zi))
+    slope = law.top_drive_inertia_kg_m2 * (1.0 - zi**n) / (n * h) * lag_response(law.speed_lag,
+                                                                              zi)
+    speed = section_response(law.lowpass_speed, zi) - a * g * slope
+    return -c * speed, -c * a * g * mean * lag_response(law.torque_lag, zi)
 
 
 def top_boundary(law: Law, lag_s: float = 0.0) -> TopBoundary:
     """(K(s), L(s)) of ``law`` at the top of the string, SI [N·m/rad]: K/L is the dynamic
-    stiffness T_top = −(K/L) φ_top the drive's inertia and the law present to the pipe."""
+    stiffness T_top = −(K/L) φ_top the drive's inertia and the law present to the pipe. The
+    motor torque the law reads is its command of the sample before, through the drive's lag;
+    the top gets the command held and lagged: T_cmd (1 − B z⁻¹/(1 + lag s)) = A Ω."""
     if isinstance(law, Kinematic):
         raise ValueError("the kinematic pass-through holds the top's speed: its boundary is the "
                          "held top (no law)")
+    _check_modelled(law)
     j, h = law.top_drive_inertia_kg_m2, law.h_s
-    if isinstance(law, Off):
-        return lambda s: (j * s * s, 1.0 + 0.0 * s)
-    if not isinstance(law, (StiffPI, SoftSpeed, ZTorque)):
-        raise ValueError(f"law {law.name!r}: no linear model of its top boundary")
-    pi = law.pi
 
-    def parts(s: Complex) -> tuple[Complex, Complex, Complex]:
+    def boundary(s: Complex) -> tuple[Complex, Complex]:
         zi = np.exp(-h * s)
-        hold = (1.0 - zi) / (s * h) / (1.0 + lag_s * s)
-        return zi, hold, pi.kp_nm_s_rad + pi.ki_nm_rad * h / (1.0 - zi)
-
-    if isinstance(law, StiffPI):
-        def stiff(s: Complex) -> tuple[Complex, Complex]:
-            _, hold, c = parts(s)
-            return s * (j * s + hold * c), 1.0 + 0.0 * s
-        return stiff
-    if isinstance(law, SoftSpeed):
-        derivative = law.derivative
-
-        def soft(s: Complex) -> tuple[Complex, Complex]:
-            zi, hold, c = parts(s)
-            d = derivative.corner_hz * 2.0 * np.pi * section_response(derivative.section, zi)
-            return s * (j * s + hold * (c - law.compensated_inertia_kg_m2 * d)), 1.0 + 0.0 * s
-        return soft
-    a = law.alpha / law.impedance_nm_s_rad
-    n = law.torque_window.n
-
-    def z_torque(s: Complex) -> tuple[Complex, Complex]:
-        zi, hold, c = parts(s)
-        g = (section_response(law.lowpass_out, zi) * section_response(law.highpass, zi)
-             * section_response(law.lowpass_torque, zi))
-        mean = (1.0 - zi**n) / (n * (1.0 - zi))
-        e = mean * lag_response(law.torque_lag, zi) * zi / (1.0 + lag_s * s)
-        b = j * (1.0 - zi**n) / (n * h) * lag_response(law.speed_lag, zi)
-        loop = 1.0 + a * c * g * e
-        y_num = hold * c * (section_response(law.lowpass_speed, zi) - a * g * b)
-        return s * (j * s * loop + y_num), loop
-    return z_torque
+        lag = 1.0 + lag_s * s
+        hold = (1.0 - zi) / (s * h) / lag
+        a, b = law_responses(law, zi)
+        loop = 1.0 - b * zi / lag
+        return s * (j * s * loop - hold * a), loop
+    return boundary

@@ -136,8 +136,13 @@ def test_stability_with_a_law_at_the_top_gives_the_closed_loop_roots():
         omega = 2 * math.pi * m["frequency_hz"] / math.sqrt(1.0 - m["damping_ratio"] ** 2)
         assert m["growth_rate_per_s"] == pytest.approx(-m["damping_ratio"] * omega, rel=1e-6)
     assert soft["modes"][0]["damping_ratio"] > 5 * held["modes"][0]["damping_ratio"]
+    light = json.loads(run("stability", "--string-model", "distributed", "--json", "--law",
+                           "z_torque", "--top-drive-inertia", "500").stdout)
+    assert "inertia 500 kg m^2" in light["modes_boundary"]
     for args, words in ((("--law", "z_torque"), "--law"),
                         (("--string-model", "distributed", "--sample-period", "0.01"),
-                         "--sample-period")):
+                         "--sample-period"),
+                        (("--string-model", "distributed", "--law", "z_torque", "--drive-kp",
+                          "1000"), "--drive-kp with --law")):
         refused = run("stability", *args, check=False)
         assert refused.returncode == 2 and words in refused.stderr

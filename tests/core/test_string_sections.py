@@ -103,6 +103,7 @@ def _held_top_frequencies(kind: str, bha_end: float, count: int) -> list[float]:
     return roots[:count]
 
 
+@pytest.mark.slow("the taper's modes by a transfer-matrix product on a fine frequency grid: ~4 s")
 def test_modes_of_a_tapered_string_are_its_transfer_matrices_in_si():
     """The distributed string's lossless modes (top held, bit off bottom) on two pipe sections
     of two materials: the roots of an independent SI transfer-matrix product (1e-7), and the

@@ -36,6 +36,7 @@ def _per_step(rig: Rig, duration_s: float):
     return tr.to_si(rig.scales, rig.groups.n)
 
 
+@pytest.mark.slow("a torque step and the two-inertia ring-down over many periods: ~1.8 s each")
 @pytest.mark.parametrize("inertia", [2900.0, 100.0])
 def test_motor_torque_step_accelerates_both_inertias_and_rings_at_the_two_inertia_mode(
         base, inertia):

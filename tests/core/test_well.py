@@ -122,6 +122,7 @@ def test_static_above_sliding_friction_breaks_off_from_the_top():
     assert peak == pytest.approx((0.25 * 7 / 8 + 0.4 / 8) * per_mu, rel=3e-2)
 
 
+@pytest.mark.slow("on bottom in a build with the wall rubbing, the ledger over 200 t*: ~2.6 s")
 def test_energy_balance_includes_the_walls_friction():
     """On bottom in the built well (friction 0.3 / 0.25, the preset's damping): the top
     drive's work = stored energy + bit, dashpots, transport and the wall's dissipation, and
