@@ -49,7 +49,7 @@ def section_response(section: FirstOrderSection, zi: Complex) -> Complex:
 def lag_response(lag: HeldLag, zi: Complex) -> Complex:
     """y_k = x_{k-1} + (y_{k-1} − x_{k-1}) d: (1 − d) z⁻¹/(1 − d z⁻¹); τ = 0: 1."""
     if lag.tau_s == 0.0:
-        return np.ones_like(zi)
+        return 1.0
     return (1.0 - lag.decay) * zi / (1.0 - lag.decay * zi)
 
 

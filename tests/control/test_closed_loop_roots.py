@@ -136,6 +136,7 @@ def test_the_top_is_the_hold_and_the_loop_through_the_drives_lag():
     s = 1j * 2 * np.pi * 1.3
     zi = np.exp(-s * H)
     a, b = law_responses(made, zi)
+    assert top_boundary(made)(s) == top_boundary(made, 0.0)(s)      # no lag by default
     for lag_s in (0.0, 0.05):
         k, loop = top_boundary(made, lag_s)(s)
         hold = (1 - zi) / (s * H) / (1 + lag_s * s)
