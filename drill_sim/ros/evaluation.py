@@ -253,7 +253,9 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
             if time.monotonic() > end:
                 raise OSError("the rig and the controller did not connect within 60 s")
             rclpy.spin_once(node, timeout_sec=0.05)
-        time.sleep(0.5)                         # let the subscriptions match both ways
+        time.sleep(2.0)                         # let the subscriptions match both ways (a
+        # loaded machine took longer than 0.5 s: the first tick's sample was missed and the
+        # lockstep waited for an answer that never came)
         future = pause.call_async(SetBool.Request(data=False))
         end = time.monotonic() + timeout_s
         last = -1

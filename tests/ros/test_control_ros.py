@@ -21,7 +21,7 @@ def test_ros_lockstep_scores_equal_the_offline_scores(ros):
     scenario = Scenario.of_points("step", ((0.0, 61.0),), ((0.0, 100.0),), duration_s=1.2,
                                   window_start_s=0.2, start_rpm=60.0)
     drive = preset.top_drive                                     # its limits: ±60 kN·m
-    through_nodes = run_ros(preset, scenario, settings)
+    through_nodes = run_ros(preset, scenario, settings, timeout_s=300.0)
     offline = run_loop(preset, scenario, settings)
     assert np.allclose(through_nodes["time_s"], offline.series["time_s"], rtol=0, atol=1e-12)
     a = sample_metrics(preset, through_nodes, 0.2, drive, law="z_torque", scenario="step")
@@ -45,7 +45,7 @@ def test_ros_lockstep_plays_a_wob_step_and_a_speed_ramp_at_the_offline_instants(
                                   ((0.0, 100.0), (0.6, 100.0), (0.7, 115.0)), duration_s=1.2,
                                   window_start_s=0.2)
     drive = None if law == "kinematic" else preset.top_drive
-    through_nodes = run_ros(preset, scenario, settings)
+    through_nodes = run_ros(preset, scenario, settings, timeout_s=300.0)
     offline = run_loop(preset, scenario, settings)
     assert np.allclose(through_nodes["time_s"], offline.series["time_s"], rtol=0, atol=1e-12)
     for key in ("bit_speed_rad_s", "top_drive_speed_rad_s", "surface_torque_nm", "wob_n"):
@@ -69,7 +69,7 @@ def test_ros_lockstep_switches_the_law_on_at_the_offline_sample(ros):
                             perturbation=0.0)
     scenario = Scenario.of_points("switch", ((0.0, 60.0),), ((0.0, 100.0),), duration_s=1.0,
                                   window_start_s=0.2, switch_on_s=0.4, start_rpm=61.0)
-    through_nodes = run_ros(preset, scenario, settings)
+    through_nodes = run_ros(preset, scenario, settings, timeout_s=300.0)
     offline = run_loop(preset, scenario, settings)
     stiff = run_loop(preset, Scenario.of_points("stiff", ((0.0, 60.0),), ((0.0, 100.0),),
                                                 duration_s=1.0, window_start_s=0.2,
