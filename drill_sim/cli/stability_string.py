@@ -120,7 +120,11 @@ def _law_boundary(args: argparse.Namespace, case: Case, drive) -> tuple[object, 
     preset = case.preset
     gains = reference_gains(args.law, preset, td.top_drive_inertia_kg_m2,
                             string_model="distributed")
-    law = make_law(args.law, h, pipe_impedance(preset), td.top_drive_inertia_kg_m2, **gains)
+    try:
+        law = make_law(args.law, h, pipe_impedance(preset), td.top_drive_inertia_kg_m2, **gains)
+    except ParameterError as exc:
+        raise UsageError(f"--law {args.law} with --sample-period {h:g}: its reference gains for "
+                         f"this string do not fit that sample period: {exc}") from None
     boundary_si = top_boundary(law, td.drive_lag_s)
     t_star = preset.rig.scales.time_s
     c_unit = preset.rig.scales.stiffness_nm_per_rad
