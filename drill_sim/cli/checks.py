@@ -183,3 +183,11 @@ def _is_negative_number(token: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+SAMPLE_PERIOD_RANGE_S = (1e-4, 0.1)   # a law's sample period h [s] on the command line
+
+
+def sample_period(value: object) -> float:
+    """``--sample-period``: a law's sample period h [s], within SAMPLE_PERIOD_RANGE_S."""
+    return in_range("--sample-period", value, *SAMPLE_PERIOD_RANGE_S, unit="s")

@@ -32,7 +32,7 @@ from ..core.distributed import STRING_MODELS
 from ..session.parameter_table import PERTURBATION_RANGE
 from ..terminal import Progress
 from .case import RPM_MAX
-from .checks import in_range, json_line, number, output_file, plot_file, whole
+from .checks import in_range, json_line, number, output_file, plot_file, sample_period, whole
 from .errors import UsageError
 
 DEFAULT_LAWS = ("kinematic", "stiff_pi", "soft_speed", "z_torque")
@@ -131,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
     scenarios = _scenarios(args)
     laws = _laws(args.laws)
     gains = _gains(args.gain, laws)
-    h = in_range("--sample-period", args.sample_period, 1e-4, 0.1, unit="s")
+    h = sample_period(args.sample_period)
     drive = _drive(args, preset)
     if args.out is not None:
         if args.out.suffix.lower() not in (".csv", ".json"):

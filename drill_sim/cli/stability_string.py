@@ -17,7 +17,7 @@ from ..core import DEFAULT_DT, ParameterError, SteadyState
 from ..core.distributed import geometry_waves
 from ..core.stability_distributed import natural_frequencies, string_modes, string_stability
 from .case import Case
-from .checks import in_range, json_line
+from .checks import json_line, sample_period
 from .errors import UsageError
 from .single import resolve_drive, string_waves
 
@@ -115,8 +115,8 @@ def _law_boundary(args: argparse.Namespace, case: Case, drive) -> tuple[object, 
         if args.sample_period is not None:
             raise UsageError("--sample-period: the law's sample period; expected it with --law")
         return None, f"bit off bottom, hook force held, top drive {td.top_drive_mode}", {}
-    h = DEFAULT_SAMPLE_PERIOD_S if args.sample_period is None else in_range(
-        "--sample-period", args.sample_period, 1e-4, 0.1, unit="s")
+    h = DEFAULT_SAMPLE_PERIOD_S if args.sample_period is None else sample_period(
+        args.sample_period)
     preset = case.preset
     gains = reference_gains(args.law, preset, td.top_drive_inertia_kg_m2,
                             string_model="distributed")
