@@ -83,6 +83,22 @@ def pytest_configure(config) -> None:
     config.addinivalue_line("markers", "process: starts a program (an installed entry point)")
     config.addinivalue_line("markers", "ros: needs rclpy")
     config.addinivalue_line("markers", "slow(reason): a long validation run, and why it is long")
+    _programs_can_be_grouped(config)
+
+
+def _programs_can_be_grouped(config) -> None:
+    """Refuse ``--dist loadgroup`` where the ``programs`` group would be silently ignored:
+    pytest 9.2 keeps node ids where pytest-xdist 3.8 writes a test's group, so the programs
+    ran on both workers at once, sharing the cores they are timed on."""
+    from importlib.metadata import version
+    if config.getoption("dist", "no") != "loadgroup":
+        return
+    xdist = tuple(int(x) for x in version("pytest-xdist").split(".")[:3] if x.isdigit())
+    if pytest.version_tuple[:2] >= (9, 2) and xdist <= (3, 8, 0):
+        raise pytest.UsageError(
+            f"pytest {pytest.__version__} with pytest-xdist {version('pytest-xdist')} ignores "
+            "xdist groups, and the tests that start programs must run one at a time: install "
+            "the 'test' extra's versions (pip install -e '.[test]')")
 
 
 _READING: set[str] = set()      # modules being read (test modules may import each other)
@@ -121,6 +137,7 @@ def _module_facts(path: str) -> tuple[frozenset[str], bool]:
     return frozenset(starting), uses_ros
 
 
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items) -> None:
     conftest_starting = _module_facts(__file__)[0] - {"_programs_only_where_marked"}
     for item in items:

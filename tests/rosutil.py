@@ -5,8 +5,10 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
+import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import rclpy
 from conftest import installed
@@ -14,8 +16,11 @@ from rclpy.node import Node
 
 
 def isolate() -> int:
-    """Give this test process (and the nodes it starts) its own DDS domain, loopback only."""
-    domain = 1 + (os.getpid() % 100)
+    """Give this test process (and the nodes it starts) its own DDS domain, loopback only:
+    the two xdist workers of one run always get different domains (odd and even)."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
+    index = int(worker[2:]) if worker[2:].isdigit() else 0
+    domain = 1 + 2 * (os.getpid() % 50) + index % 2
     os.environ["ROS_DOMAIN_ID"] = str(domain)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     return domain
@@ -87,5 +92,8 @@ class NodeProcess:
     def __enter__(self) -> NodeProcess:
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.stop()
+    def __exit__(self, kind, *exc) -> None:
+        status, out = self.stop()
+        if kind is not None:          # the test failed: what the program said, in its report
+            print(f"--- {Path(self.proc.args[0]).name} (status {status}) said:\n{out}",
+                  file=sys.stderr)

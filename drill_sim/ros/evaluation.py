@@ -25,6 +25,7 @@ import math
 import os
 import shlex
 import subprocess
+import tempfile
 import time
 from pathlib import Path
 
@@ -232,10 +233,11 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
             put(name, m, getattr(m, array)[j])
     node.create_subscription(JointState, at_rig("~/joint_states"), on_joints, depth)
     env = dict(os.environ)
+    # the rig's log goes to a file, not a pipe: a pipe nobody reads fills up and blocks the rig
+    rig_log = tempfile.TemporaryFile(mode="w+")
     try:
         procs.append(subprocess.Popen(rig_command(preset, scenario, settings), env=env,
-                                      stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                      text=True))
+                                      stdout=subprocess.DEVNULL, stderr=rig_log, text=True))
         ctl = controller_command(preset, scenario, settings, user_command)
         if ctl is not None:
             procs.append(subprocess.Popen(ctl, env=env, stdout=subprocess.DEVNULL))
@@ -249,7 +251,7 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
                    and node.count_publishers(at_rig("~/joint_states")) > 0
                    and (ctl is None or node.count_subscribers(
                        at_rig("~/measured/top_drive/motor_wrench")) > 0)):
-            _check_alive(procs)
+            _check_alive(procs, rig_log)
             if time.monotonic() > end:
                 raise OSError("the rig and the controller did not connect within 60 s")
             rclpy.spin_once(node, timeout_sec=0.05)
@@ -261,12 +263,14 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
         last = -1
         while min(len(v) for v in data.values()) < n:
             rclpy.spin_once(node, timeout_sec=0.05)
-            _check_alive(procs)
+            _check_alive(procs, rig_log)
             if switched and not switched[0]:
                 raise OSError(f"the controller refused law = {settings.law} at switch-on")
             if time.monotonic() > end:
+                stop_processes(procs)
                 raise OSError(f"lockstep run stalled: {min(len(v) for v in data.values())} of "
-                              f"{n} ticks after {timeout_s:g} s")
+                              f"{n} ticks after {timeout_s:g} s; the rig's log ended: "
+                              + " | ".join(_tail(rig_log, 5)))
             got = len(data["bit_speed_rad_s"])
             if progress is not None and got != last:
                 last = got
@@ -274,6 +278,7 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
         del future
     finally:
         stop_processes(procs)
+        rig_log.close()
         node.destroy_node()
         if owns:
             rclpy.try_shutdown()
@@ -287,9 +292,16 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
     return out
 
 
-def _check_alive(procs: list[subprocess.Popen]) -> None:
-    for p in procs:
+def _tail(log, lines: int) -> list[str]:
+    """The last ``lines`` non-empty lines written to the file ``log``."""
+    log.flush()
+    log.seek(0)
+    return [line for line in log.read().splitlines() if line.strip()][-lines:] or ["(empty)"]
+
+
+def _check_alive(procs: list[subprocess.Popen], rig_log) -> None:
+    """Raise naming the first program that stopped (the rig with its log's last line)."""
+    for i, p in enumerate(procs):
         if p.poll() is not None:
-            err = p.stderr.read() if p.stderr is not None else ""
-            raise OSError(f"{Path(p.args[0]).name} stopped with status {p.returncode}"
-                          + (f": {err.strip().splitlines()[-1]}" if err.strip() else ""))
+            said = f": {_tail(rig_log, 1)[0]}" if i == 0 else ""
+            raise OSError(f"{Path(p.args[0]).name} stopped with status {p.returncode}{said}")
