@@ -65,6 +65,10 @@ WALL_SWEEPS = 200                        # Gauss-Seidel sweeps at most (converge
 # extra output columns: pipe torque and force on the BHA, top axial speed and force
 O_T_BOTTOM, O_F_BOTTOM, O_V_TOP, O_F_TOP = range(kn.NO, kn.NO + 4)
 NOD = kn.NO + 4
+# extra commands: the hook's mode (0: force, the hook holds w0; 1: position, the drawworks
+# moves the block at C_V_BLOCK [L*/t*], positive down, and the string's top follows it)
+C_HOOK_POSITION, C_V_BLOCK = kn.NC, kn.NC + 1
+NCD = kn.NC + 2
 
 
 @njit(cache=True, inline="always")
@@ -275,6 +279,7 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
     n, lam, beta, h, psi = p[kn.P_N], p[kn.P_LAM], p[kn.P_BETA], p[kn.P_H], p[kn.P_PSI]
     inv_dth, dth = p[kn.P_INV_DTHETA], p[kn.P_DTHETA]
     w0, om0, v_min = c[kn.C_W0], c[kn.C_OMEGA0], c[kn.C_V_MIN]
+    block, v_block = c[C_HOOK_POSITION] != 0.0, c[C_V_BLOCK]
     n_nodes = surf.shape[0]
     mask = n_nodes - 1
     sector = n_nodes * dth
@@ -320,7 +325,7 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
         a_t, a_a = ta_in[mt - 1], aa_in[ma - 1]
         rate = (a_t - a_prev) / h          # the bottom torque's rate while the bit is held
         # the top: speed imposed or the drive's inertia under its motor torque; hook force w0
-        # unless the drawworks' speed limit holds it
+        # unless the drawworks' speed limit holds it, or (position) the block's speed
         om_top, integral_m, om_td_new, tm_new, ref_new, t_bar = om0, integral, om0, tm, ref, tm
         if drive:
             if mode == kn.MODE_SPEED:
@@ -330,9 +335,12 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
                 rate_step, hj_top, kp, t_min, t_max, c_end, c_mean)
             om_top = 0.5 * (om_td + om_td_new)
         ts_top = tb_in[0] + z_top * om_top
-        v_top = (w0 - ab_in[0]) / az[0]
-        if v_top < v_min:
-            v_top = v_min
+        if block:
+            v_top = v_block
+        else:
+            v_top = (w0 - ab_in[0]) / az[0]
+            if v_top < v_min:
+                v_top = v_min
         f_top = ab_in[0] + az[0] * v_top
         # the BHA and the bit: the lumped kernel's step, taken in parts at the laws' switches
         hs, left, splits, om_int, v_int = h, h, 1, 0.0, 0.0

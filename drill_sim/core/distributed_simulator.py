@@ -93,6 +93,27 @@ class StringSimulator(Simulator):
         self._stuck = (self._wall[0] > 0.0).astype(np.int64)     # at rest: held
         super().__init__(groups, waves.h, stick_window=stick_window,
                          hoist_speed_limit=hoist_speed_limit, nodes=nodes, drive=drive)
+        self._c = np.concatenate([self._c, np.zeros(dk.NCD - self._c.size)])
+
+    # ---- the hook ------------------------------------------------------------------------
+    def set_hook(self, position: bool, block_speed: float = 0.0) -> None:
+        """The string's axial top boundary: the hook's force (``position`` False: the hook
+        holds w0, ``set_commands``) or the block's motion (True: the top moves at
+        ``block_speed`` [L*/t*], positive down, 0 held, whatever force that takes)."""
+        from .parameters import check_number
+        speed = check_number("block speed", block_speed, low=None)
+        self._c[dk.C_HOOK_POSITION], self._c[dk.C_V_BLOCK] = float(bool(position)), speed
+
+    @property
+    def hook_position(self) -> bool:
+        """The block holds the top (True) or the hook's force does (False)."""
+        return bool(self._c[dk.C_HOOK_POSITION])
+
+    @property
+    def top_force(self) -> float:
+        """The force the string's top takes from the hook, counted as w0 is [F*]: the
+        available weight; the hook carries W_s less it."""
+        return float(self._x[dk.X_F_TOP])
 
     def _extend(self) -> None:
         if self._x.size != dk.NXD:

@@ -66,6 +66,7 @@ class Rig:
         self.set_hoist_speed_limit(hoist_speed_limit_m_s)
         self._hook_load_n = params.submerged_weight_n
         self._speed_rad_s = 0.0
+        self.hook_mode, self.block_speed_m_s = "force", 0.0
         self._forget_samples()
 
     def _simulator(self, dt: float, geometry: StringGeometry | None) -> Simulator:
@@ -112,6 +113,43 @@ class Rig:
             limit_m_s = check_number("hoist_speed_limit_m_s", limit_m_s)
         self.hoist_speed_limit_m_s = limit_m_s
         self.sim.set_hoist_speed_limit(limit_m_s / self.scales.velocity_m_s)
+
+    # ---- the hook: force or position -------------------------------------------------------
+    HOOK_MODES = ("force", "position")
+
+    def set_hook_mode(self, mode: str, block_speed_m_s: float = 0.0) -> None:
+        """The string's axial top boundary. ``force`` (default): the hook holds the commanded
+        hook load. ``position``: the drawworks moves the block at ``block_speed_m_s`` [m/s],
+        positive down (0: the block held), and the hook load is what the string's top then
+        takes (``sample().hook_load_n``); hook-load commands are kept but not applied until
+        the mode is ``force`` again, which starts bumplessly from the load measured then. Only
+        the distributed string: the lumped one is axially rigid, so a held block would hold the
+        bit."""
+        if mode not in self.HOOK_MODES:
+            raise ParameterError(f"hook_mode = {mode!r}: expected one of "
+                                 f"{', '.join(self.HOOK_MODES)}")
+        speed = check_number("block_speed_m_s", block_speed_m_s, low=-10.0, high=10.0)
+        sim = self.sim
+        if mode == "position" and not isinstance(sim, StringSimulator):
+            raise ParameterError("hook_mode = 'position' needs string_model = 'distributed': "
+                                 "the lumped string is axially rigid, so a block held still "
+                                 "would hold the bit; use hook_mode = 'force'")
+        if isinstance(sim, StringSimulator):
+            if mode == "force" and sim.hook_position:    # bumpless: hold what the hook carries
+                self._hook_load_n = self.measured_hook_load_n
+                sim.set_commands(self.w0_of(self._hook_load_n), sim.commands[1])
+            sim.set_hook(mode == "position", speed / self.scales.velocity_m_s)
+        self.hook_mode, self.block_speed_m_s = mode, speed
+
+    @property
+    def measured_hook_load_n(self) -> float:
+        """The hook load the string's top takes now [N]: W_s less the top's force. With the
+        hook in force mode this is the commanded load (except while the hoisting speed limit
+        holds the string); the lumped string has no top force of its own: the command."""
+        sim = self.sim
+        if not isinstance(sim, StringSimulator):
+            return self._hook_load_n
+        return self.params.submerged_weight_n - sim.top_force * self.scales.force_n
 
     def set_stick_window(self, window_s: float) -> None:
         """How long the stick-slip flag stays up after the bit was last stuck [s]."""
@@ -308,7 +346,8 @@ class Rig:
             top_drive_angle_rad=x[kn.X_PHI_TD],
             top_drive_speed_rad_s=self._speed_rad_s if kinematic
             else x[kn.X_OMEGA_TD] / sc.time_s,
-            hook_load_n=self._hook_load_n,
+            hook_load_n=self._hook_load_n if self.hook_mode == "force"
+            else self.measured_hook_load_n,
             stuck=bool(regime == kn.REGIME_STUCK),
             off_bottom=bool(regime == kn.REGIME_OFF_BOTTOM),
             stick_slip=self.sim.stick_slip,

@@ -36,7 +36,7 @@ class RigSample(NamedTuple):
     bit_angle_rad: float
     top_drive_angle_rad: float
     top_drive_speed_rad_s: float   # the top drive's (kinematic mode: the command)
-    hook_load_n: float             # commanded
+    hook_load_n: float             # commanded; measured with the hook in position mode
     stuck: bool
     off_bottom: bool
     stick_slip: bool               # a stick phase within the stick-slip window

@@ -227,6 +227,15 @@ def specs(preset: Preset) -> list[Spec]:
              "the largest rigs lift ~9 MN (1000 short tons)"),
         Spec("hoist_speed_limit_m_s", 0.5, "the string rises no faster than this", "m/s",
              1e-3, 3.0, "drawworks hoist at up to ~2 m/s"),
+        Spec("hook_mode", "force", "the string's axial top boundary: force (the hook holds the "
+             "commanded hook load) or position (the drawworks moves the block at "
+             "block_speed_m_s and the hook load is measured: ~/joint_states' hook effort; "
+             "hook-load commands are then kept but not applied; back to force, the hook holds "
+             "the load measured then); position needs string_model distributed",
+             choices=("force", "position")),
+        Spec("block_speed_m_s", 0.0, "with hook_mode position: the block's speed, positive "
+             "down (0: held, a drill-off test)", "m/s", -3.0, 3.0,
+             "drawworks move the block at up to ~2-3 m/s"),
         Spec("diagnostics_period_s", 1.0, "period of /diagnostics", "s", 0.05, 60.0,
              read_only="its timer is made at start; " + START_ONLY),
         Spec("record", "", "a new bag directory, in an existing folder, to record the session "

@@ -74,11 +74,19 @@ def make_rig(p: dict[str, object], dt_s: float | None = None,
     ``dt_s`` [s] is given (a recorded session's own step). ``string_model`` (absent: lumped,
     as in sessions recorded before it existed) ``distributed`` needs ``geometry``, the
     preset's pipe (the node's) or the one a bag's ``string`` record kept (``bag resim``)."""
-    return Rig(rig_parameters(p), dt_s=step_s(p) if dt_s is None else dt_s,
-               stick_window_s=p["stick_slip_window_s"],
-               hoist_speed_limit_m_s=p["hoist_speed_limit_m_s"],
-               top_drive=top_drive_parameters(p),
-               string_model=p.get("string_model", "lumped"), geometry=geometry)
+    rig = Rig(rig_parameters(p), dt_s=step_s(p) if dt_s is None else dt_s,
+              stick_window_s=p["stick_slip_window_s"],
+              hoist_speed_limit_m_s=p["hoist_speed_limit_m_s"],
+              top_drive=top_drive_parameters(p),
+              string_model=p.get("string_model", "lumped"), geometry=geometry)
+    rig.set_hook_mode(*hook_settings(p))
+    return rig
+
+
+def hook_settings(p: dict[str, object]) -> tuple[str, float]:
+    """(hook_mode, block_speed_m_s) of a session's parameters (a session recorded before the
+    hook had a mode: force)."""
+    return str(p.get("hook_mode", "force")), float(p.get("block_speed_m_s", 0.0))
 
 
 def geometry_record(geometry: StringGeometry) -> dict[str, str]:
@@ -261,15 +269,20 @@ def apply_changes(rig: Rig, old: dict[str, object], new: dict[str, object]) -> s
     changed = {k for k in new if new[k] != old.get(k)}
     if "rate_hz" in changed and (why := tick_refusal(new["rate_hz"], rig.dt_s)) is not None:
         raise ParameterError(why)
-    old_drive = rig.top_drive
-    if changed & set(TOP_DRIVE_FIELDS):
-        rig.set_top_drive(top_drive_parameters(new))        # a change of mode is bumpless
-    if changed & set(RIG_FIELDS):
-        try:
+    old_drive, old_hook = rig.top_drive, (rig.hook_mode, rig.block_speed_m_s)
+    try:
+        if changed & {"hook_mode", "block_speed_m_s"}:
+            rig.set_hook_mode(*hook_settings(new))
+        if changed & set(TOP_DRIVE_FIELDS):
+            rig.set_top_drive(top_drive_parameters(new))    # a change of mode is bumpless
+        if changed & set(RIG_FIELDS):
             rig.replace_parameters(rig_parameters(new))
-        except ParameterError:
+    except ParameterError:
+        if rig.top_drive != old_drive:
             rig.set_top_drive(old_drive)
-            raise
+        if (rig.hook_mode, rig.block_speed_m_s) != old_hook:
+            rig.set_hook_mode(*old_hook)
+        raise
     if "stick_slip_window_s" in changed:
         rig.set_stick_window(new["stick_slip_window_s"])
     if "hoist_speed_limit_m_s" in changed:

@@ -307,4 +307,17 @@ BREAKS: tuple[Break, ...] = (
         "self._x[kn.X_OMEGA] = st.omega0 * (1.0 + perturbation)",
         "self._x[kn.X_OMEGA] = st.omega0",
         "tests/core/test_rig.py::test_a_perturbed_steady_start_speeds_only_the_bit"),
+    one("the held block lets the string's top follow the hook's force", CORE +
+        "distributed_kernel.py", "            v_top = v_block\n",
+        "            v_top = (w0 - ab_in[0]) / az[0]\n",
+        "tests/core/test_hook_position.py::test_held_block_drills_off_the_strings_stretch",
+        "tests/core/test_hook_position.py::test_lowered_block_sets_the_drill_rate"),
+    one("the block's speed taken positive up", CORE + "rig.py",
+        "sim.set_hook(mode == \"position\", speed / self.scales.velocity_m_s)",
+        "sim.set_hook(mode == \"position\", -speed / self.scales.velocity_m_s)",
+        "tests/core/test_hook_position.py::test_lowered_block_sets_the_drill_rate"),
+    one("the hook load shown is the command in position mode too", CORE + "rig.py",
+        "            hook_load_n=self._hook_load_n if self.hook_mode == \"force\"\n",
+        "            hook_load_n=self._hook_load_n if True\n",
+        "tests/core/test_hook_position.py::test_held_block_drills_off_the_strings_stretch"),
 )
