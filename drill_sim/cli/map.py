@@ -32,6 +32,7 @@ from .single import (
     RUN_OPTIONS,
     Timing,
     add_run_arguments,
+    formations_note,
     resolve_drive,
     resolve_start,
     resolve_timing,
@@ -85,6 +86,7 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"--plot {args.plot}: the map has {grid.x_values.size} x "
                              f"{grid.y_values.size} points; expected at least two values of "
                              f"{grid.x.option} and of {grid.y.option}")
+    formations_note(grid.case(0), "drill_sim map")
     points = [run_settings(grid.case(p), timing, args.start, gap, perturbation, drive=drive,
                            where=f" at {grid.label(p)}", string_model=args.string_model)
               for p in range(grid.size)]

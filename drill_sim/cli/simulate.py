@@ -22,6 +22,7 @@ from .single import (
     Drive,
     add_run_arguments,
     amount,
+    formations_note,
     resolve_drive,
     resolve_start,
     resolve_timing,
@@ -79,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
     drive = resolve_drive(args, case)
     settings = run_settings(case, timing, args.start, gap, perturbation, drive=drive,
                             string_model=args.string_model)
+    formations_note(case, "drill_sim simulate")
 
     progress = Progress("simulating")
     result = run_single(settings, output_interval=interval / timing.t_star_s if keep_rows

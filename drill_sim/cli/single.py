@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from dataclasses import dataclass, replace
 
 from ..core import DEFAULT_DT, NoSteadyDrilling, steady_state
@@ -248,6 +249,18 @@ def string_waves(case: Case, string_model: str | None, dt: float):
                          "'lumped' C, I, M, W_s, not the pipe's geometry; expected a preset "
                          "with a 'string' section or --string-model lumped")
     return geometry_waves(case.preset.rig, case.preset.string, dt)
+
+
+def formations_note(case: Case, program: str) -> None:
+    """Say on stderr that ``program`` (one rock throughout) does not follow the preset's
+    formations, which every rig session does (the node, run, control, bag resim)."""
+    string = case.preset.string if case.si else None
+    if string is not None and string.well is not None and string.well.formations:
+        n = len(string.well.formations)
+        print(f"{program}: note: the preset's {n} formation{'s' * (n > 1)} along the hole "
+              f"{'are' if n > 1 else 'is'} not followed here (one rock throughout: its bit "
+              "section's); the node, drill_sim run and drill_sim control follow them",
+              file=sys.stderr)
 
 
 def _duration(args: argparse.Namespace, dt: float, unit: str, default: float) -> float:

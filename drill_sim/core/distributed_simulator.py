@@ -130,11 +130,10 @@ class StringSimulator(Simulator):
         A top drive in the loop turns at omega0 under the torque at the top of the string (its
         motor torque, PI integral term and torque command)."""
         self._extend()
-        from .stability import steady_state
         w_bit = self._bit_weight(w0, omega0)
         super().start_steady(w_bit, omega0, perturbation)
         self.set_commands(w0, omega0)          # the hook holds the available weight
-        st = steady_state(self.groups, w_bit, omega0)      # the bit's (``steady_state``)
+        st = self.steady(w_bit, omega0)        # the bit's (``steady_state``)
         x = self._x
         wall_t, wall_a = self._wall_forces(st.v0, omega0)
         self._stuck[:] = 0                     # sliding everywhere
@@ -160,12 +159,11 @@ class StringSimulator(Simulator):
         """The weight on bit of steady drilling under the hook's w0: w = w0 - sum(c_a) v0(w)
         - the wall's axial drag at v0(w), by fixed-point iteration (the drag's share is small:
         its derivative in w << 1)."""
-        from .stability import steady_state
         drag, w = float(np.sum(self._a.c)), w0
         if drag == 0.0 and self.waves.wall is None:
             return w
         for _ in range(100):
-            v0 = steady_state(self.groups, w, omega0).v0
+            v0 = self.steady(w, omega0).v0
             wall_a = self._wall_forces(v0, omega0)[1]
             w_new = w0 - drag * v0 - (0.0 if wall_a is None else float(np.sum(wall_a)))
             if abs(w_new - w) <= 1e-15 * abs(w0):
@@ -189,9 +187,8 @@ class StringSimulator(Simulator):
     def steady_state(self):
         """Steady drilling under the commands: at the bit, the hook's w0 less the axial
         dashpots' drag (``start_steady``)."""
-        from .stability import steady_state
         w0, om0 = self.commands
-        return steady_state(self.groups, self._bit_weight(w0, om0), om0)
+        return self.steady(self._bit_weight(w0, om0), om0)
 
     def start_at_rest(self, gap: float = 0.0) -> None:
         """Bit at rest ``gap`` [L*] above a flat bottom, string relaxed and hanging in static

@@ -108,25 +108,34 @@ def preset_from_dict(name: str, data: object) -> Preset:
 _SECTION_KEYS = tuple(f.name for f in fields(StringSection))
 
 
-_WELL_KEYS = ("survey", "friction_static", "friction_dynamic")
+_WELL_KEYS = ("survey", "friction_static", "friction_dynamic", "formations")
 
 
 def well_from_dict(name: str, well: object) -> Well:
     """A preset's ``well`` section: ``survey`` (rows [measured depth m, inclination deg,
     azimuth deg], the first at 0 m, down to the bit), ``friction_static`` and
     ``friction_dynamic`` (the string against the wall; the rule between them is Coulomb's,
-    exact: a part of the string at rest stays there while the wall can hold it)."""
+    exact: a part of the string at rest stays there while the wall can hold it),
+    ``formations`` (layers by increasing ``top_m``, each with the rock values that change
+    there: ``Formation``)."""
     given = _section(name, {"well": well}, "well", _WELL_KEYS, required=True, need=())
     survey = given.get("survey", [])
     if not isinstance(survey, list):
         raise ParameterError(f"preset {name!r}: well.survey is {type(survey).__name__}: "
                              "expected a list of rows [measured depth m, inclination deg, "
                              "azimuth deg]")
+    formations = given.get("formations", [])
+    if not isinstance(formations, list):
+        raise ParameterError(f"preset {name!r}: well.formations is "
+                             f"{type(formations).__name__}: expected a list of layers "
+                             "({top_m: m, and any of intrinsic_specific_energy_pa, "
+                             "contact_stress_pa, friction_coefficient}), by increasing top")
     try:
         return Well(survey=tuple(tuple(r) if isinstance(r, list) else r for r in survey),
                     friction_static=given.get("friction_static", 0.0),
                     friction_dynamic=given.get("friction_dynamic",
-                                               given.get("friction_static", 0.0)))
+                                               given.get("friction_static", 0.0)),
+                    formations=tuple(formations))
     except ParameterError as exc:
         raise ParameterError(f"preset {name!r}: well: {exc}") from None
 

@@ -7,6 +7,7 @@ and the recorder never see a dimensionless number.
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from dataclasses import replace
 
 from . import kernel as kn
@@ -16,9 +17,10 @@ from .parameters import ParameterError, RigParameters, check_number
 from .resolution import STEPS_PER_PERIOD, fastest_period, max_step, resolves
 from .rig_sample import RigSample
 from .simulator import DEFAULT_DT, Simulator
-from .stability import SteadyState, steady_state
+from .stability import NoSteadyDrilling, SteadyState
 from .string_geometry import StringGeometry
 from .top_drive import DriveGroups, TopDriveParameters
+from .well import ROCK
 
 
 def _check_step(dt_s: float, params: RigParameters, top_drive: TopDriveParameters) -> None:
@@ -67,6 +69,13 @@ class Rig:
         self._hook_load_n = params.submerged_weight_n
         self._speed_rad_s = 0.0
         self.hook_mode, self.block_speed_m_s = "force", 0.0
+        # the formations along the hole: their tops [m MD] and what each changes
+        well = None if geometry is None else geometry.well
+        self.formations = () if well is None else well.formations
+        self._tops = [f.top_m for f in self.formations]
+        self._start_md_m = 0.0 if geometry is None else geometry.length_m
+        self.layer = -1                        # the formation the bit is in (-1: above them)
+        self.rock = self._params_rock(params)
         self._forget_samples()
 
     def _simulator(self, dt: float, geometry: StringGeometry | None) -> Simulator:
@@ -113,6 +122,49 @@ class Rig:
             limit_m_s = check_number("hoist_speed_limit_m_s", limit_m_s)
         self.hoist_speed_limit_m_s = limit_m_s
         self.sim.set_hoist_speed_limit(limit_m_s / self.scales.velocity_m_s)
+
+    # ---- the rock: formations along the hole ---------------------------------------------
+    @staticmethod
+    def _params_rock(params: RigParameters) -> dict[str, float]:
+        return {name: float(getattr(params, name)) for name in ROCK}
+
+    def _cut(self, rock: dict[str, float]) -> None:
+        """Cut ``rock`` (the ``ROCK`` values, SI) from now on, in the rig's scales."""
+        p = self.params
+        self.rock = dict(rock)
+        self.sim.set_rock(
+            rock["intrinsic_specific_energy_pa"] / p.intrinsic_specific_energy_pa,
+            p.bit_radius_m * p.wear_flat_length_m * rock["contact_stress_pa"]
+            / self.scales.force_n,
+            rock["friction_coefficient"] * p.wear_flat_orientation * p.cutting_inclination)
+
+    @property
+    def bit_measured_depth_m(self) -> float:
+        """The bit's measured depth [m]: the string's length at the start plus its advance."""
+        return self._start_md_m + float(self.sim.live_state[kn.X_U]) * self.scales.length_m
+
+    def _follow_formations(self, start_md_m: float | None = None) -> bool:
+        """Enter the formation the bit is in, if it changed; True if it did. Deeper, each
+        formation crossed changes what it gives, in order, and a run-time change of the rock
+        (``replace_parameters``) holds until a formation gives that value; at a start, or
+        higher up, the rock is rebuilt from the parameters' down to the bit's formation.
+        ``start_md_m``: a start, the bit drilling (or about to) at that measured depth [m]."""
+        if not self._tops:
+            return False
+        start = start_md_m is not None
+        md = start_md_m if start else self.bit_measured_depth_m
+        layer = bisect_right(self._tops, md) - 1
+        if layer == self.layer and not start:
+            return False
+        if start or layer < self.layer:        # from the parameters' rock down to the bit
+            rock, crossed = self._params_rock(self.params), self.formations[:layer + 1]
+        else:                                  # deeper: the layers crossed, in order
+            rock, crossed = dict(self.rock), self.formations[self.layer + 1:layer + 1]
+        for f in crossed:
+            rock.update(f.changes())
+        self.layer = layer
+        self._cut(rock)
+        return True
 
     # ---- the hook: force or position -------------------------------------------------------
     HOOK_MODES = ("force", "position")
@@ -190,7 +242,11 @@ class Rig:
                        motor_torque=s.motor_torque * torque,
                        drive_integral=s.drive_integral * torque,
                        drive_reference=s.drive_reference * torque)
+        # the rock: a value changed now holds until a formation gives it; the others stay
+        rock = {n: float(getattr(params, n)) if getattr(params, n) != getattr(self.params, n)
+                else self.rock[n] for n in ROCK}
         self.params, self.scales, self.groups, self.sim = params, new, params.groups, sim
+        self._cut(rock)
         self.set_stick_window(self.stick_window_s)
         self.set_hoist_speed_limit(self.hoist_speed_limit_m_s)
         self.command(self._speed_rad_s, self._hook_load_n)
@@ -239,7 +295,14 @@ class Rig:
 
         Raises NoSteadyDrilling, changing nothing, when the weight cannot beat friction, and
         ParameterError when the drive's limits cannot supply the steady torque."""
-        self.steady_state(top_drive_speed_rad_s, hook_load_n)
+        rock, layer = self.rock, self.layer
+        self._follow_formations(self._start_md_m)      # the start's formation
+        try:
+            self.steady_state(top_drive_speed_rad_s, hook_load_n)
+        except (NoSteadyDrilling, ParameterError):
+            self.layer = layer
+            self._cut(rock)
+            raise
         check_number("top_drive_speed_rad_s", top_drive_speed_rad_s, low_inclusive=True)
         check_number("hook_load_n", hook_load_n, low_inclusive=True)
         self.sim.start_steady(self.w0_of(hook_load_n), self.omega0_of(top_drive_speed_rad_s),
@@ -250,6 +313,7 @@ class Rig:
 
     def start_at_rest(self, gap_m: float = 0.0) -> None:
         """Bit at rest ``gap_m`` above a flat bottom, hanging (hook load = W_s), not rotating."""
+        self._follow_formations(self._start_md_m)
         self.sim.start_at_rest(check_number("gap_m", gap_m, low_inclusive=True)
                                / self.scales.length_m)
         self.command(0.0, self.params.submerged_weight_n)
@@ -257,9 +321,9 @@ class Rig:
         self._forget_samples()
 
     def steady_state(self, top_drive_speed_rad_s: float, hook_load_n: float) -> SteadyState:
-        """The dimensionless steady state at these commands (NoSteadyDrilling if none)."""
-        return steady_state(self.groups, self.w0_of(hook_load_n),
-                            self.omega0_of(top_drive_speed_rad_s))
+        """The dimensionless steady state at these commands in the rock being cut (the
+        formation's; NoSteadyDrilling if none)."""
+        return self.sim.steady(self.w0_of(hook_load_n), self.omega0_of(top_drive_speed_rad_s))
 
     # ---- stepping -----------------------------------------------------------------------
     @property
@@ -288,6 +352,8 @@ class Rig:
         """Advance exactly ``n_steps`` steps (>= 0) with the commands held."""
         if n_steps > 0:
             self.sim.advance(int(n_steps))
+            if self._tops:
+                self._follow_formations()
 
     def warm_up(self) -> None:
         """Load the compiled kernel now (a zero-step advance), so the first real step is fast."""

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -24,7 +25,7 @@ from .resolution import (
     resolves,
     surface_nodes,
 )
-from .stability import steady_state
+from .stability import SteadyState, steady_state
 from .top_drive import DriveGroups
 from .trajectory import StateView, Trajectory
 
@@ -53,6 +54,7 @@ class Simulator:
         self._p = np.zeros(kn.NP)
         self._p[:kn.P_MODE] = (groups.n, groups.psi, groups.lam, groups.beta, self.dt, dtheta,
                                1.0 / dtheta)
+        self.rock = (1.0, groups.lam, groups.beta)   # set_rock
         self._x = np.zeros(kn.NX)
         self._k = np.zeros(kn.NK, dtype=np.int64)
         self._surf = np.zeros(nodes)
@@ -77,7 +79,7 @@ class Simulator:
     def start_steady(self, w0: float, omega0: float, perturbation: float = 0.0) -> None:
         """The exact steady start (model contract, section 4); omega scaled by 1 + perturbation."""
         perturbation = check_number("perturbation", perturbation, low=-1.0)
-        st = steady_state(self.groups, w0, omega0)
+        st = self.steady(w0, omega0)
         d = self.drive
         if not d.holds(st.t0):
             raise ParameterError(f"steady drilling needs a motor torque of {st.t0:.4g} C, outside "
@@ -104,6 +106,30 @@ class Simulator:
         self._c[kn.C_T_CMD] = st.t0
         self._k[:] = (0, kn.REGIME_ROTATING, 0, 0, 0)
         self.reset_window()
+
+    # ---- the rock ---------------------------------------------------------------------
+    def set_rock(self, cutting: float = 1.0, lam: float | None = None,
+                 beta: float | None = None) -> None:
+        """The rock the bit cuts from now on (a formation along the hole), in this simulator's
+        scales, which stay: ``cutting`` the intrinsic specific energy over the one the scales
+        were made with (the cutting forces n delta times it), ``lam`` and ``beta`` the wear
+        flats' groups (None: the simulator's ``groups``')."""
+        cutting = check_number("cutting", cutting)
+        lam = self.groups.lam if lam is None else check_number("lambda", lam, low_inclusive=True)
+        beta = self.groups.beta if beta is None else check_number("beta", beta,
+                                                                   low_inclusive=True)
+        self.rock = (cutting, lam, beta)
+        self._p[kn.P_N] = self.groups.n * cutting
+        self._p[kn.P_LAM], self._p[kn.P_BETA] = lam, beta
+
+    def steady(self, w0: float, omega0: float) -> SteadyState:
+        """Steady drilling at (w0, omega0) in the rock being cut (``set_rock``): the model
+        contract's steady state of that rock's own scaling, its lengths in this one's."""
+        cutting, lam, beta = self.rock
+        st = steady_state(replace(self.groups, lam=lam, beta=beta), w0, omega0)
+        if cutting == 1.0:
+            return st
+        return replace(st, delta_n0=st.delta_n0 / cutting, v0=st.v0 / cutting)
 
     def start_at_rest(self, gap: float = 0.0) -> None:
         """Bit at rest ``gap`` [L*] above a flat bottom, string relaxed, commands zero."""

@@ -24,15 +24,54 @@ import numpy as np
 
 from .parameters import ParameterError, check_number
 
+# what a formation may change, with the range each takes (the node's parameter table's)
+ROCK = {"intrinsic_specific_energy_pa": (1e7, 5e8), "contact_stress_pa": (0.0, 5e8),
+        "friction_coefficient": (0.05, 1.5)}
+
+
+@dataclass(frozen=True)
+class Formation:
+    """A layer of rock from ``top_m`` [m, measured depth] down to the next layer's top: the
+    rock and bit-rock parameters that change there (None: as above it; the first layer's
+    above is the preset's ``bit`` section): intrinsic specific energy epsilon [Pa], wear-flat
+    contact stress sigma [Pa], bit-rock friction coefficient mu [-]."""
+
+    top_m: float
+    intrinsic_specific_energy_pa: float | None = None
+    contact_stress_pa: float | None = None
+    friction_coefficient: float | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "top_m", check_number("top_m", self.top_m, low_inclusive=True))
+        for name, (low, high) in ROCK.items():
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, check_number(
+                    name, value, low=low, low_inclusive=low == 0.0, high=high))
+        if all(getattr(self, name) is None for name in ROCK):
+            raise ParameterError(f"formation at {self.top_m:g} m changes nothing: expected at "
+                                 f"least one of {', '.join(ROCK)}")
+
+    def changes(self) -> dict[str, float]:
+        """The rock values this formation gives (``ROCK`` names)."""
+        return {n: getattr(self, n) for n in ROCK if getattr(self, n) is not None}
+
+    def given(self) -> dict[str, float]:
+        """The fields given (top_m and what changes), for records."""
+        return {k: v for k, v in (("top_m", self.top_m),
+                                  *((n, getattr(self, n)) for n in ROCK)) if v is not None}
+
 
 @dataclass(frozen=True)
 class Well:
     """The hole: ``survey`` rows (measured depth [m], inclination [deg], azimuth [deg]), the
-    first at 0 m; the string's friction against the wall, static and dynamic (0: none)."""
+    first at 0 m; the string's friction against the wall, static and dynamic (0: none); the
+    ``formations`` along it, by increasing top (none: the preset's rock all the way)."""
 
     survey: tuple[tuple[float, float, float], ...] = ()
     friction_static: float = 0.0
     friction_dynamic: float = 0.0
+    formations: tuple[Formation, ...] = ()
 
     def __post_init__(self) -> None:
         rows = []
@@ -58,9 +97,37 @@ class Well:
         for name in ("friction_static", "friction_dynamic"):
             object.__setattr__(self, name, check_number(name, getattr(self, name),
                                                         low_inclusive=True, high=5.0))
+        layers = []
+        for i, f in enumerate(self.formations):
+            if isinstance(f, dict):
+                try:
+                    f = Formation(**f)
+                except TypeError as exc:
+                    raise ParameterError(f"formations[{i}] = {f!r}: {exc}; expected top_m and "
+                                         f"any of {', '.join(ROCK)}") from None
+            if not isinstance(f, Formation):
+                raise ParameterError(f"formations[{i}] = {f!r}: expected a mapping of top_m "
+                                     f"[m] and any of {', '.join(ROCK)}")
+            if layers and f.top_m <= layers[-1].top_m:
+                raise ParameterError(f"formations[{i}] at {f.top_m:g} m: expected tops "
+                                     f"increasing (formations[{i - 1}] is at "
+                                     f"{layers[-1].top_m:g} m)")
+            layers.append(f)
+        object.__setattr__(self, "formations", tuple(layers))
         if self.friction_dynamic > self.friction_static:
             raise ParameterError(f"friction_dynamic = {self.friction_dynamic!r} is out of range: "
                                  f"expected <= friction_static = {self.friction_static!r}")
+
+    def rock_by_layer(self, preset_rock: dict[str, float]) -> tuple[tuple[float, ...],
+                                                                   tuple[dict[str, float], ...]]:
+        """(tops [m], the rock in each layer): every layer's three values resolved, each
+        unchanged from the layer above where the layer does not give it, from
+        ``preset_rock`` (the ``ROCK`` names) above the first top."""
+        rock, out = dict(preset_rock), []
+        for f in self.formations:
+            rock = {n: (rock[n] if getattr(f, n) is None else getattr(f, n)) for n in ROCK}
+            out.append(rock)
+        return tuple(f.top_m for f in self.formations), tuple(out)
 
     @property
     def rubs(self) -> bool:

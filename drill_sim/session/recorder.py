@@ -159,4 +159,6 @@ def _context(p: dict[str, object], rig: Rig, preset: str, node: str, stamp_epoch
         "figures": {k: repr(v) for k, v in key_figures(rig.params).items()},
         "session": {"preset": preset, "node": node, "stamp_epoch_ns": str(stamp_epoch_ns),
                     "events_topic": events_topic, "step_s": repr(rig.dt_s)},
-    } | ({"string": geometry_record(rig.geometry)} if rig.string_model == "distributed" else {})
+    } | ({"string": geometry_record(rig.geometry)}          # the pipe, or the formations
+         if rig.geometry is not None and (rig.string_model == "distributed" or rig.formations)
+         else {})

@@ -76,6 +76,7 @@ class RigSession:
         self.naming = naming or Naming()
         self.rig = rules.make_rig(self.p, step_s, geometry=geometry)
         rules.start(self.rig, self.p)
+        self._layer = self.rig.layer            # the formation at the start
         self.sensors = session_sensors(self.p, self.rig.dt_s, sensor_profile)
         self.sensors.warm_up()
         self.with_clock = bool(self.p.get("publish_clock", False))
@@ -150,7 +151,22 @@ class RigSession:
             self.log.error(f"simulation paused: {exc}; change the commands or parameters, "
                            "then resume with ~/pause false or ~/reset")
             return False
+        if self.rig.layer != self._layer:
+            self._entered_formation()
         return True
+
+    def _entered_formation(self) -> None:
+        """The bit entered another formation: said, and recorded as an event."""
+        self._layer = layer = self.rig.layer
+        rock = {k: f"{v:.6g}" for k, v in self.rig.rock.items()}
+        where = f"formation {layer} (top {self.rig.formations[layer].top_m:g} m)" \
+            if layer >= 0 else "the rock above the first formation"
+        self.log.info(f"the bit entered {where} at {self.rig.bit_measured_depth_m:.3f} m MD, "
+                      f"t = {self.sim_time_s:.3f} s: " + ", ".join(f"{k} {v}"
+                                                               for k, v in rock.items()))
+        if self.recorder is not None:
+            self.recorder.record_event("formation", self.sim_time_s,
+                                       {"layer": str(layer), **rock})
 
     def set_live(self, live: Sequence[bool]) -> None:
         """Which outputs are published (and, not recording, encoded)."""
@@ -266,6 +282,7 @@ class RigSession:
         if self.recorder is not None:
             self.recorder.record_event("reset", self.sim_time_s)
         self.offset_s = offset
+        self._layer = self.rig.layer
         self.sensors.reset()
         self.pacer.reset(self.rig.time_s)
         if self.player is not None:

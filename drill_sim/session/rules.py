@@ -102,9 +102,12 @@ def geometry_record(geometry: StringGeometry) -> dict[str, str]:
                      if getattr(x, k.name) is not None} for x in value])
         elif f.name == "well":
             if value is not None:
-                record["well"] = json.dumps({"survey": [list(r) for r in value.survey],
-                                             "friction_static": value.friction_static,
-                                             "friction_dynamic": value.friction_dynamic})
+                well = {"survey": [list(r) for r in value.survey],
+                        "friction_static": value.friction_static,
+                        "friction_dynamic": value.friction_dynamic}
+                if value.formations:
+                    well["formations"] = [f.given() for f in value.formations]
+                record["well"] = json.dumps(well)
         elif value is not None:
             record[f.name] = repr(float(value))
     return record
@@ -122,7 +125,8 @@ def geometry_from_record(record: dict[str, str]) -> StringGeometry:
             well = json.loads(record["well"])
             given["well"] = Well(survey=tuple(tuple(r) for r in well["survey"]),
                                  friction_static=well["friction_static"],
-                                 friction_dynamic=well["friction_dynamic"])
+                                 friction_dynamic=well["friction_dynamic"],
+                                 formations=tuple(well.get("formations", ())))
         return StringGeometry(**given)
     except (TypeError, ValueError, AttributeError, KeyError) as exc:
         raise ParameterError(f"string record {record!r}: not a pipe geometry ({exc})") from None
