@@ -143,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
     for law in laws:
         law_gains = {} if args.published_gains else reference_gains(
             law, preset, drive.top_drive_inertia_kg_m2, string_model=args.string_model,
-            sensor_profile=args.sensor_profile)
+            sensor_profile=args.sensor_profile, sample_period_s=h)
         law_gains.update(gains.get(law, {}))
         one = LoopSettings(law=law, gains=law_gains, sample_period_s=h, top_drive=drive,
                            string_model=args.string_model, sensor_profile=args.sensor_profile,

@@ -119,7 +119,7 @@ def _law_boundary(args: argparse.Namespace, case: Case, drive) -> tuple[object, 
         args.sample_period)
     preset = case.preset
     gains = reference_gains(args.law, preset, td.top_drive_inertia_kg_m2,
-                            string_model="distributed")
+                            string_model="distributed", sample_period_s=h)
     try:
         law = make_law(args.law, h, pipe_impedance(preset), td.top_drive_inertia_kg_m2, **gains)
     except ParameterError as exc:

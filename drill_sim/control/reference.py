@@ -26,6 +26,11 @@ base: 2.4 times less motor-torque noise for 20° more lag at the mode).
 f₁ is the first torsional mode with the top's inertia (``first_mode_frequency_hz``), of the
 string model the law will run on: lumped √(C(1/I + 1/J_TD)), or the distributed pipe's own
 frequency equation (base: 0.76 and 0.57 Hz).
+
+On the distributed string the pipe's higher modes are there too, and these rules' filters made
+the top feed them (Re Z_top < 0 from ~1 Hz for SoftSpeed, ~1.8 Hz for Z-Torque on base):
+there the filters are then chosen for a top passive up to the fifth mode (``passive``), for
+the law's sample period. The lumped string's tunings are these rules, unchanged.
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ from pathlib import Path
 
 from ..core.presets import Preset
 from ..core.sensor_profile import SensorProfile, load_profile
-from .tuning import first_mode_frequency_hz, pipe_impedance
+from .tuning import first_mode_frequency_hz, pipe_impedance, torsional_modes_hz
 
 COMPENSATED_FRACTION = 0.95       # J_c / J_TD of the reference SoftSpeed
 DERIVATIVE_CORNER_PER_MODE = 25.0  # SoftSpeed's derivative corner / f₁
@@ -46,11 +51,24 @@ NOISY_TORQUE_LOWPASS_PER_MODE = 2.0   # Z-Torque's LPF_T / f₁ when the speed s
 
 def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
                     string_model: str = "lumped",
-                    sensor_profile: str | Path | SensorProfile | None = None
-                    ) -> dict[str, float]:
+                    sensor_profile: str | Path | SensorProfile | None = None,
+                    sample_period_s: float = 1e-3) -> dict[str, float]:
     """Gains of ``law`` tuned for this string and drive, and (Z-Torque) for the signals of
     ``sensor_profile`` (None or ``ideal``: exact signals every sample); empty: the law's
-    defaults."""
+    defaults. On the distributed string the filters are then chosen for a top passive up to
+    the fifth torsional mode at the law's ``sample_period_s`` [s] (``passive``)."""
+    gains = _lumped_rule(law, preset, top_drive_inertia_kg_m2, string_model, sensor_profile)
+    if string_model != "distributed":
+        return gains
+    from .passive import PASSIVE_MODES, passive_gains
+    top_mode = torsional_modes_hz(preset.rig, preset.string, float(top_drive_inertia_kg_m2))
+    return passive_gains(law, sample_period_s, pipe_impedance(preset), top_drive_inertia_kg_m2,
+                         gains, top_mode[PASSIVE_MODES - 1], preset.top_drive.drive_lag_s)
+
+
+def _lumped_rule(law: str, preset: Preset, top_drive_inertia_kg_m2: float, string_model: str,
+                 sensor_profile: str | Path | SensorProfile | None) -> dict[str, float]:
+    """The rules above, from f₁ of ``string_model``."""
     f1 = first_mode_frequency_hz(preset, top_drive_inertia_kg_m2, string_model=string_model)
     z = pipe_impedance(preset)
     if law == "soft_speed":

@@ -121,21 +121,26 @@ def test_simulate_distributed_with_the_top_drive_in_the_loop():
 
 
 def test_stability_with_a_law_at_the_top_gives_the_closed_loop_roots():
-    """``--law``: the law's reference gains and sample period in the JSON, the boundary named,
-    each mode's growth rate Re s [1/s] = −ζ ω; SoftSpeed's first mode far better damped than
-    the drive with its motor torque held; ``--law`` and ``--sample-period`` refused where they
-    do nothing."""
-    soft = json.loads(run("stability", "--string-model", "distributed", "--json", "--law",
-                          "soft_speed", "--sample-period", "0.01").stdout)
+    """``--law``: the law's reference gains for that sample period and the string (passive up
+    to the fifth mode) and the sample period in the JSON, the boundary named, each mode's
+    growth rate Re s [1/s] = −ζ ω; Z-Torque's first mode far better damped than the drive with
+    its motor torque held; ``--law`` and ``--sample-period`` refused where they do nothing."""
+    from drill_sim.control.reference import reference_gains
+    from drill_sim.core import load_preset
     held = json.loads(run("stability", "--string-model", "distributed", "--json",
                           "--top-drive-mode", "torque").stdout)
-    assert (soft["law"], soft["sample_period_s"]) == ("soft_speed", 0.01)
-    assert soft["law_gains"]["compensated_inertia_kg_m2"] == pytest.approx(0.95 * 2900.0)
-    assert "law soft_speed" in soft["modes_boundary"] and soft["modes_complete"]
-    for m in soft["modes"]:
-        omega = 2 * math.pi * m["frequency_hz"] / math.sqrt(1.0 - m["damping_ratio"] ** 2)
-        assert m["growth_rate_per_s"] == pytest.approx(-m["damping_ratio"] * omega, rel=1e-6)
-    assert soft["modes"][0]["damping_ratio"] > 5 * held["modes"][0]["damping_ratio"]
+    for law in ("soft_speed", "z_torque"):
+        out = json.loads(run("stability", "--string-model", "distributed", "--json", "--law",
+                             law, "--sample-period", "0.01").stdout)
+        assert (out["law"], out["sample_period_s"]) == (law, 0.01)
+        assert out["law_gains"] == pytest.approx(reference_gains(
+            law, load_preset("base"), 2900.0, string_model="distributed", sample_period_s=0.01))
+        assert f"law {law}" in out["modes_boundary"] and out["modes_complete"]
+        for m in out["modes"]:
+            omega = 2 * math.pi * m["frequency_hz"] / math.sqrt(1.0 - m["damping_ratio"] ** 2)
+            assert m["growth_rate_per_s"] == pytest.approx(-m["damping_ratio"] * omega,
+                                                           rel=1e-6)
+    assert out["modes"][0]["damping_ratio"] > 5 * held["modes"][0]["damping_ratio"]
     light = json.loads(run("stability", "--string-model", "distributed", "--json", "--law",
                            "z_torque", "--top-drive-inertia", "500").stdout)
     assert "inertia 500 kg m^2" in light["modes_boundary"]

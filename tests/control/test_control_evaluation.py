@@ -311,9 +311,10 @@ def test_a_law_takes_the_drives_limits_unless_its_gains_set_them():
 @LONG
 def test_on_the_damped_distributed_string_z_torque_stops_the_first_modes_sticking(preset):
     """control.md's distributed table: on the preset's damped pipe at 60 rpm / 100 kN the
-    kinematic drive sticks (0.16 of the window) and Z-Torque, tuned to the distributed f1
-    with ideal signals, stops it (stick 0, SSI <= 0.7 of the kinematic's, saturation < 5 %);
-    on the lossless pipe it did not (the undamped third mode, control.md)."""
+    kinematic drive sticks (0.16 of the window) and Z-Torque, tuned to the distributed f1 and
+    passive up to the fifth mode, with ideal signals stops it (stick 0, SSI 0.56: <= 0.5 of
+    the kinematic's; its output on a limit 8 % of the samples); on the lossless pipe it did
+    not (the undamped third mode, control.md)."""
     scenario = Scenario.steady(60.0, 100.0, duration_s=60.0, window_start_s=30.0)
     rows = {law: run_loop(preset, scenario, LoopSettings(
                 law=law, string_model="distributed",
@@ -322,5 +323,5 @@ def test_on_the_damped_distributed_string_z_torque_stops_the_first_modes_stickin
     kinematic, z = rows["kinematic"], rows["z_torque"]
     assert kinematic.stick_fraction > 0.1
     assert z.stick_fraction == 0.0
-    assert z.ssi <= 0.7 * kinematic.ssi
-    assert z.saturation_fraction < 0.05
+    assert z.ssi <= 0.5 * kinematic.ssi
+    assert z.saturation_fraction < 0.1
