@@ -93,80 +93,115 @@ def tick_commands(preset: Preset, scenario: Scenario, h: float
     return speed_set, hook
 
 
+class LoopStepper:
+    """The offline loop one sample at a time, its law outside: ``start`` gives sample 0 and
+    its reading, each ``step(output)`` holds that command over the next period h and gives the
+    next sample; ``finish`` records the last output, ``result`` scores the run. ``run_loop``
+    puts a law under the ``Supervisor`` here; the Gymnasium environment (``drill_sim.gym``)
+    puts a policy. ``output`` is a motor torque [N·m] (a torque law's drive) or the speed
+    command [rad/s] (the kinematic drive's)."""
+
+    def __init__(self, preset: Preset | str, scenario: Scenario, settings: LoopSettings, *,
+                 record: str | Path | None = None) -> None:
+        preset = load_preset(preset) if isinstance(preset, str) else preset
+        self.preset, self.scenario, self.settings = preset, scenario, settings
+        p = session_parameters(preset, scenario, settings, Path(record) if record else None)
+        self.h = h = float(settings.sample_period_s)       # checked by session_parameters
+        self.drive = law_top_drive(preset, settings.law, settings.top_drive)
+        self.speed_set, self.hook = tick_commands(preset, scenario, h)
+        self.n = self.speed_set.size - 1
+        self.check = partial(checked_change, {s.name: s for s in specs(preset)})
+        checked_changes(scenario, p, self.check)          # every change, before anything runs
+        self.session = RigSession(p, geometry=preset.string, preset=preset.name)
+        self.session.set_live([False] * len(self.session.outputs))   # nobody subscribes
+        self.commands = _Commands(self.session)
+        self.window_k = max(1, math.ceil(scenario.metrics_from_s / h - 1e-9))
+        self.speed_law = LAWS[settings.law].output_kind == "speed"
+        self.series = {k: np.empty(self.n + 1) for k in SERIES}
+        self.k = 0
+        self._changes = list(scenario.changes)
+
+    @property
+    def rig(self):
+        return self.session.rig
+
+    def start(self) -> tuple[RigSample, Measured]:
+        """Sample 0 (the steady start) and what the sensors read of it."""
+        self.session.emit(())
+        return self.session.last[1], self.session.last[2]
+
+    def step(self, output: float) -> tuple[RigSample, Measured]:
+        """``output`` for the current sample k, held over k..k+1; sample k + 1 and its
+        reading (the scenario's changes due made first, as the node's player does)."""
+        k, session = self.k, self.session
+        _record(self.series, k, session.last[1], output)
+        while self._changes and due(self._changes[0][0], k * self.h):
+            session.change(self.check(session.p, self._changes.pop(0)[1]))
+        if self.speed_law:
+            self.commands.send(float(output), float(self.hook[k]))
+        else:
+            self.commands.send(float(self.speed_set[k]), float(self.hook[k]), float(output))
+        session.tick()
+        self.k = k = k + 1
+        if k == self.window_k:
+            self.rig.reset_metrics_window()
+        return session.last[1], session.last[2]
+
+    def finish(self, output: float) -> None:
+        """Record the last sample's output (the law's answer to it)."""
+        _record(self.series, self.k, self.session.last[1], output)
+
+    def result(self) -> LoopResult:
+        return loop_result(self.preset, self.scenario, self.settings, self.drive, self.rig,
+                           self.series, self.window_k)
+
+    def close(self) -> None:
+        self.session.close()
+
+
 def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *,
              progress: Callable[[float], None] | None = None,
              record: str | Path | None = None) -> LoopResult:
     """Close the loop over the scenario (module docstring); ``record``: a new bag directory
     the session is recorded into, as the node records it."""
-    preset = load_preset(preset) if isinstance(preset, str) else preset
-    p = session_parameters(preset, scenario, settings, Path(record) if record else None)
-    h = float(settings.sample_period_s)                # checked by session_parameters
-    drive = law_top_drive(preset, settings.law, settings.top_drive)
-    speed_set, hook = tick_commands(preset, scenario, h)
-    n = speed_set.size - 1
-    check = partial(checked_change, {s.name: s for s in specs(preset)})
-    checked_changes(scenario, p, check)                # every change, before anything runs
-    session = RigSession(p, geometry=preset.string, preset=preset.name)
-    session.set_live([False] * len(session.outputs))   # nobody subscribes offline
-    commands = _Commands(session)
-    window_k = max(1, math.ceil(scenario.metrics_from_s / h - 1e-9))
+    loop = LoopStepper(preset, scenario, settings, record=record)
     try:
-        series = _close(session, commands, preset, scenario, settings, drive, h, n,
-                        speed_set, hook, progress, check, window_k)
+        _close(loop, progress)
     finally:
-        session.close()
-    return loop_result(preset, scenario, settings, drive, session.rig, series, window_k)
+        loop.close()
+    return loop.result()
 
 
-def _close(session: RigSession, commands: _Commands, preset: Preset, scenario: Scenario,
-           settings: LoopSettings, drive, h: float, n: int, speed_set: np.ndarray,
-           hook: np.ndarray, progress: Callable[[float], None] | None,
-           check: Callable[[dict[str, object], dict[str, object]], dict[str, object]],
-           window_k: int) -> dict[str, np.ndarray]:
-    rig = session.rig
+def _close(loop: LoopStepper, progress: Callable[[float], None] | None) -> None:
+    settings, rig, h, speed_set, n = loop.settings, loop.rig, loop.h, loop.speed_set, loop.n
     measure = _measure(settings)
-    gains = law_gains(settings, drive)
-    z, j = pipe_impedance(preset), drive.top_drive_inertia_kg_m2
+    gains = law_gains(settings, loop.drive)
+    z, j = pipe_impedance(loop.preset), loop.drive.top_drive_inertia_kg_m2
     # the kinematic pass-through: its output is the set-point, Ω_set itself, every tick
-    speed_law = LAWS[settings.law].output_kind == "speed"
-    session.emit(())                                  # the sample at t = 0, measured
-    sample, reading = session.last[1], session.last[2]
-    if speed_law:
+    sample, reading = loop.start()                    # the sample at t = 0, measured
+    if loop.speed_law:
         output = rig.commanded_speed_rad_s             # bumpless: the speed the drive holds
     else:
-        switch_k = math.ceil(scenario.switch_on_s / h - 1e-9)
+        switch_k = math.ceil(loop.scenario.switch_on_s / h - 1e-9)
         first, first_gains = (settings.law, gains) if switch_k == 0 else (
-            "stiff_pi", {"torque_min_nm": drive.motor_torque_min_nm,
-                         "torque_max_nm": drive.motor_torque_max_nm})
+            "stiff_pi", {"torque_min_nm": loop.drive.motor_torque_min_nm,
+                         "torque_max_nm": loop.drive.motor_torque_max_nm})
         sup = Supervisor(h, z, j, first, first_gains, speed_set_rad_s=float(speed_set[0]))
         sup.last_output = rig.commanded_motor_torque_nm   # take over from what the drive holds
         output = sup.step(measure(sample, reading))
-    series = {k: np.empty(n + 1) for k in SERIES}
-    _record(series, 0, sample, output)
     every = max(1, n // 200)
-    changes = list(scenario.changes)
     for k in range(1, n + 1):
-        while changes and due(changes[0][0], (k - 1) * h):     # as the node's scenario player
-            session.change(check(session.p, changes.pop(0)[1]))
-        if speed_law:
-            commands.send(float(output), float(hook[k - 1]))
-        else:
-            commands.send(float(speed_set[k - 1]), float(hook[k - 1]), float(output))
-        session.tick()
-        if k == window_k:
-            rig.reset_metrics_window()
-        sample, reading = session.last[1], session.last[2]
-        if speed_law:
+        sample, reading = loop.step(output)
+        if loop.speed_law:
             output = float(speed_set[k])
         else:
             if k == switch_k:
                 sup.replace_law(settings.law, gains)      # bumpless: from the last output
             sup.set_speed(float(speed_set[k]))
             output = sup.step(measure(sample, reading))
-        _record(series, k, sample, output)
         if progress is not None and k % every == 0:
             progress(k / n)
-    return series
+    loop.finish(output)
 
 
 def _measure(settings: LoopSettings) -> Callable[[RigSample, Measured], SurfaceMeasurement]:
