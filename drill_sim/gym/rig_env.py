@@ -67,8 +67,8 @@ class RigEnv(gym.Env):
         if top_drive_mode not in MODES:
             raise ParameterError(f"top_drive_mode = {top_drive_mode!r}: expected torque or speed")
         self.top_drive_mode = top_drive_mode
-        self.h = check_number("control_period_s", control_period_s, low=1e-4 * (1 - 1e-9),
-                              high=0.1)
+        self.h = check_number("control_period_s", control_period_s, low=1e-4,
+                              low_inclusive=True, high=0.1)
         self.scenarios = named(scenarios.split(",")) if isinstance(scenarios, str) \
             else list(scenarios)
         if not self.scenarios or not all(isinstance(x, Scenario) for x in self.scenarios):
@@ -145,7 +145,11 @@ class RigEnv(gym.Env):
     def step(self, action):
         if self.loop is None:
             raise RuntimeError("step before reset: call reset() first")
-        value = float(np.asarray(action, dtype=np.float64).reshape(-1)[0])
+        values = np.asarray(action, dtype=np.float64).reshape(-1)
+        if values.size != 1:
+            raise ParameterError(f"action of {values.size} values: expected one, the "
+                                 "top drive's command (shape (1,) or a scalar)")
+        value = float(values[0])
         if not math.isfinite(value):
             what = "motor torque [N m]" if self.top_drive_mode == "torque" else "speed [rad/s]"
             raise ParameterError(f"action {value!r}: expected a finite {what}")

@@ -115,6 +115,7 @@ def test_a_recorded_episode_resimulates_exactly(tmp_path):
 @pytest.mark.parametrize(("kwargs", "words"), [
     ({"top_drive_mode": "position"}, "top_drive_mode = 'position'"),
     ({"control_period_s": 0.5}, "control_period_s = 0.5"),
+    ({"control_period_s": 5e-5}, r"expected a finite number >= 0.0001 and <= 0.1"),
     ({"scenarios": "bogus"}, "scenario set 'bogus' is unknown"),
     ({"reward_weights": {"ssi": 1.0}}, "reward weight 'ssi' is unknown"),
     ({"reward_weights": {"stick": -1.0}}, "reward weight stick = -1.0"),
@@ -130,6 +131,8 @@ def test_a_bad_action_is_refused_and_the_episode_goes_on():
     env.reset(seed=0)
     with pytest.raises(ParameterError, match="action nan: expected a finite motor torque"):
         env.step(np.array([math.nan]))
+    with pytest.raises(ParameterError, match="action of 2 values: expected one"):
+        env.step(np.array([1.0, 2.0]))
     obs, *_ = env.step(np.array([env.held_action]))
     assert np.all(np.isfinite(obs))
     with pytest.raises(RuntimeError, match="reset"):
