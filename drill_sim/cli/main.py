@@ -12,7 +12,7 @@ import sys
 from collections.abc import Sequence
 
 from ..core import ParameterError
-from . import bag, control, map, run, simulate, stability
+from . import bag, control, map, run, simulate, stability, tune
 from .checks import join_negative_values
 from .errors import Parser, UsageError
 
@@ -26,6 +26,8 @@ COMMANDS = {
                          "set"),
     "map": (map, "stick-slip maps over rpm and WOB (or any two quantities), on every core or a "
                  "Dask cluster"),
+    "tune": (tune, "tune a law's gains on a scenario set (Bayesian optimisation), write a "
+                   "controller params file"),
 }
 
 

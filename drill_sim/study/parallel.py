@@ -15,7 +15,7 @@ import multiprocessing
 import os
 import re
 import signal
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
 from .. import __version__
@@ -40,22 +40,25 @@ def available_cores() -> int:
 
 
 def compute(points: Sequence[RunSettings], *, workers: int = 1,
-            scheduler: str | None = None) -> Iterator[tuple[int, Metrics]]:
+            scheduler: str | None = None,
+            fn: Callable[[object], object] = point_metrics) -> Iterator[tuple[int, Metrics]]:
     """``(position, metrics)`` of every point of ``points``, in the order they finish.
 
     ``scheduler``: the address of a Dask scheduler (``tcp://host:8786``) to send them to;
     otherwise ``workers`` processes of this machine (1: this process). Closing the iterator
-    early (or an exception in the caller) cancels the points not yet started.
+    early (or an exception in the caller) cancels the points not yet started. ``fn``: what is
+    computed of each point (a module-level function, so that it travels: ``drill_sim tune``'s
+    trials go the same ways as a map's points).
     """
     if not points:
         return
     if scheduler is not None:
-        yield from _on_dask(points, scheduler)
+        yield from _on_dask(points, scheduler, fn)
     elif workers <= 1 or len(points) == 1:
         for i, settings in enumerate(points):
-            yield i, point_metrics(settings)
+            yield i, fn(settings)
     else:
-        yield from _on_pool(points, min(workers, len(points)))
+        yield from _on_pool(points, min(workers, len(points)), fn)
 
 
 def _worker_init() -> None:
@@ -73,11 +76,12 @@ def _pool_context() -> multiprocessing.context.BaseContext:
     return multiprocessing.get_context("spawn")
 
 
-def _on_pool(points: Sequence[RunSettings], workers: int) -> Iterator[tuple[int, Metrics]]:
+def _on_pool(points: Sequence[RunSettings], workers: int,
+             fn: Callable[[object], object]) -> Iterator[tuple[int, Metrics]]:
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context(),
                                initializer=_worker_init)
     try:
-        futures = {pool.submit(point_metrics, p): i for i, p in enumerate(points)}
+        futures = {pool.submit(fn, p): i for i, p in enumerate(points)}
         for future in as_completed(futures):
             yield futures[future], future.result()
     finally:
@@ -112,7 +116,8 @@ def check_address(address: str) -> str:
     return address
 
 
-def _on_dask(points: Sequence[RunSettings], address: str) -> Iterator[tuple[int, Metrics]]:
+def _on_dask(points: Sequence[RunSettings], address: str,
+             fn: Callable[[object], object]) -> Iterator[tuple[int, Metrics]]:
     check_address(address)
     require_distributed()
     from distributed import Client
@@ -125,7 +130,7 @@ def _on_dask(points: Sequence[RunSettings], address: str) -> Iterator[tuple[int,
     futures = []
     try:
         _check_workers(client, address)
-        futures = client.map(point_metrics, list(points), pure=False)
+        futures = client.map(fn, list(points), pure=False)
         position = {f.key: i for i, f in enumerate(futures)}
         for future, metrics in dask_completed(futures, loop=client.loop, with_results=True):
             yield position[future.key], metrics
