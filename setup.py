@@ -37,8 +37,8 @@ setup(
                  "colcon-common-extensions>=0.3",
                  "rosbags>=0.10", "mcap-ros2-support>=0.5", "dask[distributed]>=2024.1",
                  "mutmut>=3.8,<4", "gymnasium>=1.0", "optuna>=4.0"],
-        "gym": ["gymnasium>=1.0"],
-        "tune": ["optuna>=4.0"],                        # drill_sim tune                      # drill_sim.gym: the rig as an environment
+        "gym": ["gymnasium>=1.0"],                      # drill_sim.gym: the rig as an environment
+        "tune": ["optuna>=4.0"],                        # drill_sim tune
         "map-cluster": ["dask[distributed]>=2024.1"],   # drill_sim map --scheduler
     },
     zip_safe=False,
