@@ -109,6 +109,9 @@ class RigEnv(gym.Env):
         self.close()
         i = (int(options["scenario"]) if options and "scenario" in options
              else int(self.np_random.integers(len(self.scenarios))))
+        if not 0 <= i < len(self.scenarios):
+            raise ParameterError(f"options scenario = {i}: expected 0 to "
+                                 f"{len(self.scenarios) - 1} (the set's scenarios)")
         scenario = self.scenarios[i]
         record = None
         if self.record is not None:

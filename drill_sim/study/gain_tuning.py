@@ -143,8 +143,15 @@ def tune(job: TrialJob, space: Mapping[str, Range], *, trials: int, journal: Pat
                                 load_if_exists=True, direction="minimize",
                                 sampler=optuna.samplers.TPESampler(seed=seed))
     reference = {k: float(v) for k, v in job.gains.items()}
+    settings = {k: (list(v) if isinstance(v, tuple) else v) for k, v in job.__dict__.items()
+                if k != "gains"}
     if not study.trials:                         # the reference first: the bar to beat
+        study.set_user_attr("settings", settings)
         study.enqueue_trial({k: reference[k] for k in space})
+    elif study.user_attrs.get("settings") != settings:
+        raise ParameterError(f"the study in {journal} was run with other settings "
+                             f"({study.user_attrs.get('settings')}); expected the same to resume "
+                             "it, or another --out for a new study")
     done = sum(t.state.is_finished() for t in study.trials)
     for t in study.trials:                       # trials an interruption left running
         if t.state == optuna.trial.TrialState.RUNNING:

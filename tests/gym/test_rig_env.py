@@ -137,3 +137,5 @@ def test_a_bad_action_is_refused_and_the_episode_goes_on():
     assert np.all(np.isfinite(obs))
     with pytest.raises(RuntimeError, match="reset"):
         RigEnv("base").step(np.array([0.0]))
+    with pytest.raises(ParameterError, match="options scenario = 9: expected 0 to 0"):
+        env.reset(seed=0, options={"scenario": 9})

@@ -73,6 +73,9 @@ def test_the_reference_is_the_first_trial_and_a_study_resumes(short, tmp_path):
     assert [g for g, _ in again.trials[:3]] == [g for g, _ in first.trials]
     assert again.best.objective <= first.best.objective
     assert again.improved == (again.best.objective < 0.99 * again.reference.objective)
+    other = gt.TrialJob(**{**job.__dict__, "sensor_seed": 3})
+    with pytest.raises(ParameterError, match="was run with other settings"):
+        gt.tune(other, space, trials=6, journal=journal, seed=1)
 
 
 @pytest.mark.parametrize(("law", "names", "ranges", "words"), [
