@@ -116,7 +116,9 @@ class LoopStepper:
         self.session.set_live([False] * len(self.session.outputs))   # nobody subscribes
         self.commands = _Commands(self.session)
         self.window_k = max(1, math.ceil(scenario.metrics_from_s / h - 1e-9))
+        self.switch_k = scenario.switch_on_sample(h)
         self.speed_law = LAWS[settings.law].output_kind == "speed"
+        self.measure = _measure(settings)              # what a law reads of a tick
         self.series = {k: np.empty(self.n + 1) for k in SERIES}
         self.k = 0
         self._changes = list(scenario.changes)
@@ -147,6 +149,18 @@ class LoopStepper:
             self.rig.reset_metrics_window()
         return session.last[1], session.last[2]
 
+    def supervisor(self, law: str, gains: Mapping[str, float] | None = None) -> Supervisor:
+        """``law`` under the ``Supervisor``, taking over bumplessly from the torque the drive
+        holds now, set to the current sample's set-point; ``gains`` None: the drive's own
+        stiff loop's (its torque limits the drive's)."""
+        if gains is None:
+            gains = law_gains(LoopSettings(law=law), self.drive)
+        sup = Supervisor(self.h, pipe_impedance(self.preset),
+                         self.drive.top_drive_inertia_kg_m2, law, gains,
+                         speed_set_rad_s=float(self.speed_set[self.k]))
+        sup.last_output = self.rig.commanded_motor_torque_nm
+        return sup
+
     def finish(self, output: float) -> None:
         """Record the last sample's output (the law's answer to it)."""
         _record(self.series, self.k, self.session.last[1], output)
@@ -173,21 +187,16 @@ def run_loop(preset: Preset | str, scenario: Scenario, settings: LoopSettings, *
 
 
 def _close(loop: LoopStepper, progress: Callable[[float], None] | None) -> None:
-    settings, rig, h, speed_set, n = loop.settings, loop.rig, loop.h, loop.speed_set, loop.n
-    measure = _measure(settings)
+    settings, speed_set, n, switch_k = loop.settings, loop.speed_set, loop.n, loop.switch_k
+    measure = loop.measure
     gains = law_gains(settings, loop.drive)
-    z, j = pipe_impedance(loop.preset), loop.drive.top_drive_inertia_kg_m2
     # the kinematic pass-through: its output is the set-point, Ω_set itself, every tick
     sample, reading = loop.start()                    # the sample at t = 0, measured
     if loop.speed_law:
-        output = rig.commanded_speed_rad_s             # bumpless: the speed the drive holds
-    else:
-        switch_k = math.ceil(loop.scenario.switch_on_s / h - 1e-9)
-        first, first_gains = (settings.law, gains) if switch_k == 0 else (
-            "stiff_pi", {"torque_min_nm": loop.drive.motor_torque_min_nm,
-                         "torque_max_nm": loop.drive.motor_torque_max_nm})
-        sup = Supervisor(h, z, j, first, first_gains, speed_set_rad_s=float(speed_set[0]))
-        sup.last_output = rig.commanded_motor_torque_nm   # take over from what the drive holds
+        output = loop.rig.commanded_speed_rad_s        # bumpless: the speed the drive holds
+    else:                                             # before a switch, the drive's stiff loop
+        sup = loop.supervisor(settings.law, gains) if switch_k == 0 else \
+            loop.supervisor("stiff_pi")
         output = sup.step(measure(sample, reading))
     every = max(1, n // 200)
     for k in range(1, n + 1):

@@ -121,25 +121,16 @@ class RigEnv(gym.Env):
         sample, reading = loop.start()
         self.held_action = (loop.rig.commanded_motor_torque_nm if self.top_drive_mode == "torque"
                              else loop.rig.commanded_speed_rad_s)
-        switch_k = math.ceil(scenario.switch_on_s / self.h - 1e-9) if scenario.switch_on_s else 0
-        if switch_k and self.top_drive_mode == "torque":
-            sample, reading = self._stiff_until(switch_k, sample, reading)
+        if loop.switch_k and self.top_drive_mode == "torque":
+            sample, reading = self._stiff_until(loop.switch_k, sample, reading)
         return self._observe(reading), self._info(sample)
 
     def _stiff_until(self, switch_k: int, sample, reading):
         """The drive's own stiff loop up to the switch (as ``drill_sim control`` plays it)."""
-        from ..control.closed_loop import _measure
-        from ..control.supervisor import Supervisor
-        from ..control.tuning import pipe_impedance
-        loop, drive = self.loop, self.loop.drive
-        sup = Supervisor(self.h, pipe_impedance(self.preset), drive.top_drive_inertia_kg_m2,
-                         "stiff_pi", {"torque_min_nm": drive.motor_torque_min_nm,
-                                      "torque_max_nm": drive.motor_torque_max_nm},
-                         speed_set_rad_s=float(loop.speed_set[0]))
-        sup.last_output = loop.rig.commanded_motor_torque_nm
-        measure = _measure(self.settings)
+        loop = self.loop
+        sup = loop.supervisor("stiff_pi")
         for k in range(switch_k):
-            output = sup.step(measure(sample, reading))
+            output = sup.step(loop.measure(sample, reading))
             sample, reading = loop.step(output)
             sup.set_speed(float(loop.speed_set[k + 1]))
         self.held_action = float(output)

@@ -21,7 +21,6 @@ law takes over (bumplessly) at exactly that sample, as offline.
 
 from __future__ import annotations
 
-import math
 import os
 import shlex
 import subprocess
@@ -176,7 +175,7 @@ def run_ros(preset: Preset, scenario: Scenario, settings: LoopSettings, *,
 
     # the switch-on sample (offline: ceil(switch_on_s / h)); the kinematic row has none
     switch_k = None if kinematic or scenario.switch_on_s <= 0.0 else \
-        math.ceil(scenario.switch_on_s / settings.sample_period_s - 1e-9)
+        scenario.switch_on_sample(settings.sample_period_s)
     switcher = node.create_client(SetParameters, f"{NS}/drill_sim_controller/set_parameters")
     switched: list[bool] = []                  # the controller's answer to the switch
     switching: list[int] = []                  # the switch was asked for

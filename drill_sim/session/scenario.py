@@ -138,6 +138,11 @@ class Scenario:
         """When the controller is switched on [s]; 0: no switch (the law from the start)."""
         return 0.0 if self.controller is None else self.controller.on_at_s
 
+    def switch_on_sample(self, h_s: float) -> int:
+        """The sample of period ``h_s`` [s] the controller steps first on: the first k with
+        k h >= ``switch_on_s`` (0: no switch)."""
+        return math.ceil(self.switch_on_s / h_s - 1e-9)
+
     @property
     def metrics_from_s(self) -> float:
         """The start of the metrics window [s]: ``window_start_s``, else the controller's
