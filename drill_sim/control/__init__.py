@@ -48,9 +48,20 @@ def make_law(name: str, h_s: float, impedance_nm_s_rad: float,
     return cls(h_s, impedance_nm_s_rad, top_drive_inertia_kg_m2, **gains)
 
 
+def default_gains(name: str) -> dict[str, float]:
+    """The gains law ``name`` takes by default, those its constructor gives as numbers (the
+    others, such as Z-Torque's K_p, it derives from the string and the drive)."""
+    import inspect
+    cls = LAWS[name]
+    return {gain: float(p.default) for gain, p in inspect.signature(cls.__init__).parameters.items()
+            if gain in cls.GAINS and isinstance(p.default, (int, float))
+            and not isinstance(p.default, bool)}
+
+
 __all__ = [
     "DEFAULT_TOP_DRIVE_INERTIA_KG_M2", "LAWS", "PI", "FilteredDerivative", "FirstOrderSection",
     "Kinematic", "Law", "Off", "ParameterError", "SoftSpeed", "SoftSpeedGains", "StiffPI",
-    "SurfaceMeasurement", "ZTorque", "auto_tune_soft_speed", "dominant_frequency_hz",
-    "first_mode_frequency_hz", "make_law", "pipe_impedance", "tune_soft_speed",
+    "SurfaceMeasurement", "ZTorque", "auto_tune_soft_speed", "default_gains",
+    "dominant_frequency_hz", "first_mode_frequency_hz", "make_law", "pipe_impedance",
+    "tune_soft_speed",
 ]

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from . import make_law
+from . import default_gains, make_law
 from .impedance import top_boundary
 from .laws import Law
 
@@ -51,31 +51,27 @@ def passive_gains(law: str, h_s: float, impedance_nm_s_rad: float,
                   lag_s: float = 0.0) -> dict[str, float]:
     """``gains`` with the filters of ``law`` chosen to keep the top passive up to
     ``top_mode_hz`` (module docstring); other laws' gains unchanged."""
-    def margin(trial: dict[str, float]) -> float:
-        built = make_law(law, h_s, impedance_nm_s_rad, top_drive_inertia_kg_m2, **trial)
-        return passivity_margin_nm_s_rad(built, top_mode_hz, lag_s)
-
     cap = NYQUIST_SHARE / h_s
+    j = top_drive_inertia_kg_m2
     if law == "z_torque" and "torque_lowpass_hz" not in gains:   # a noisy speed keeps its own
-        corner, best = 2.5, None
+        corner, ladder = default_gains(law)["torque_lowpass_hz"], []
         while corner <= cap:
-            trial = {**gains, "torque_lowpass_hz": corner}
-            m = margin(trial)
-            if m >= 0.0:
-                return trial
-            best = trial if best is None or m > margin(best) else best
+            ladder.append({**gains, "torque_lowpass_hz": corner})
             corner *= LOWPASS_STEP
-        return best if best is not None else dict(gains)
-    if law == "soft_speed":
+    elif law == "soft_speed":
         corner = min(DERIVATIVE_CORNER_PER_TOP_MODE * top_mode_hz, cap)
-        best, best_margin = None, -math.inf
-        for k in range(round(0.95 / FRACTION_STEP), -1, -1):
-            trial = {**gains, "derivative_corner_hz": corner,
-                     "compensated_inertia_kg_m2": k * FRACTION_STEP * top_drive_inertia_kg_m2}
-            m = margin(trial)
-            if m >= 0.0:
-                return trial
-            if m > best_margin:
-                best, best_margin = trial, m
-        return best if best is not None else dict(gains)
-    return dict(gains)
+        top = round(gains["compensated_inertia_kg_m2"] / j / FRACTION_STEP)  # the rule's 95 %
+        ladder = [{**gains, "derivative_corner_hz": corner,
+                   "compensated_inertia_kg_m2": k * FRACTION_STEP * j}
+                  for k in range(top, -1, -1)]
+    else:
+        return dict(gains)
+    best, best_margin = dict(gains), -math.inf
+    for trial in ladder:                        # the first passive one, else the closest
+        built = make_law(law, h_s, impedance_nm_s_rad, j, **trial)
+        margin = passivity_margin_nm_s_rad(built, top_mode_hz, lag_s)
+        if margin >= 0.0:
+            return trial
+        if margin > best_margin:
+            best, best_margin = trial, margin
+    return best

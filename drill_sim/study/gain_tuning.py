@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from statistics import fmean
 
-from ..control import LAWS
+from ..control import LAWS, default_gains
 from ..control.closed_loop import run_loop
 from ..control.evaluation import LoopSettings
 from ..control.reference import reference_gains
@@ -193,12 +193,8 @@ def reference_for(job: TrialJob) -> dict[str, float]:
     """The law's gains as ``drill_sim control`` runs it: its defaults (those given as numbers
     in its signature), then the reference tuning for the job's preset, string, sensors and
     sample period."""
-    import inspect
     preset = load_preset(job.preset)
-    defaults = {name: float(p.default) for name, p in
-                inspect.signature(LAWS[job.law].__init__).parameters.items()
-                if name in LAWS[job.law].GAINS and name not in DRIVE_LIMITS
-                and isinstance(p.default, (int, float)) and not isinstance(p.default, bool)}
+    defaults = {k: v for k, v in default_gains(job.law).items() if k not in DRIVE_LIMITS}
     return {**defaults, **reference_gains(
         job.law, preset, preset.top_drive.top_drive_inertia_kg_m2,
         string_model=job.string_model, sensor_profile=job.sensor_profile,
