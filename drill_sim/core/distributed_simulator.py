@@ -17,7 +17,7 @@ import numpy as np
 from . import distributed_kernel as dk
 from . import kernel as kn
 from .distributed import StringWaves, WaveLine
-from .parameters import Groups, ParameterError
+from .parameters import Groups, ParameterError, check_number
 from .simulator import Simulator
 from .top_drive import DriveGroups
 
@@ -100,7 +100,6 @@ class StringSimulator(Simulator):
         """The string's axial top boundary: the hook's force (``position`` False: the hook
         holds w0, ``set_commands``) or the block's motion (True: the top moves at
         ``block_speed`` [L*/t*], positive down, 0 held, whatever force that takes)."""
-        from .parameters import check_number
         speed = check_number("block speed", block_speed, low=None)
         self._c[dk.C_HOOK_POSITION], self._c[dk.C_V_BLOCK] = float(bool(position)), speed
 

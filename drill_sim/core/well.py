@@ -58,8 +58,7 @@ class Formation:
 
     def given(self) -> dict[str, float]:
         """The fields given (top_m and what changes), for records."""
-        return {k: v for k, v in (("top_m", self.top_m),
-                                  *((n, getattr(self, n)) for n in ROCK)) if v is not None}
+        return {"top_m": self.top_m, **self.changes()}
 
 
 @dataclass(frozen=True)
@@ -117,17 +116,6 @@ class Well:
         if self.friction_dynamic > self.friction_static:
             raise ParameterError(f"friction_dynamic = {self.friction_dynamic!r} is out of range: "
                                  f"expected <= friction_static = {self.friction_static!r}")
-
-    def rock_by_layer(self, preset_rock: dict[str, float]) -> tuple[tuple[float, ...],
-                                                                   tuple[dict[str, float], ...]]:
-        """(tops [m], the rock in each layer): every layer's three values resolved, each
-        unchanged from the layer above where the layer does not give it, from
-        ``preset_rock`` (the ``ROCK`` names) above the first top."""
-        rock, out = dict(preset_rock), []
-        for f in self.formations:
-            rock = {n: (rock[n] if getattr(f, n) is None else getattr(f, n)) for n in ROCK}
-            out.append(rock)
-        return tuple(f.top_m for f in self.formations), tuple(out)
 
     @property
     def rubs(self) -> bool:
