@@ -17,7 +17,7 @@ interrupted ``drill_sim tune`` run again with the same file resumes it.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from statistics import fmean
@@ -162,18 +162,14 @@ def tune(job: TrialJob, space: Mapping[str, Range], *, trials: int, journal: Pat
         jobs = [TrialJob(**{**job.__dict__, "gains": {**reference, **{
             name: t.suggest_float(name, r.low, r.high, log=r.log)
             for name, r in space.items()}}}) for t in asked]
-        for i, result in _compute(jobs, workers, scheduler):
+        for i, result in parallel.compute(jobs, workers=workers, scheduler=scheduler,
+                                          fn=score):
             asked[i].set_user_attr("score", result.__dict__)
             study.tell(asked[i], result.objective)
             done += 1
             if progress is not None:
                 progress(done, trials)
     return _result(study, job.law, reference, space)
-
-
-def _compute(jobs: list[TrialJob], workers: int, scheduler: str | None
-             ) -> Iterator[tuple[int, TrialScore]]:
-    yield from parallel.compute(jobs, workers=workers, scheduler=scheduler, fn=score)
 
 
 def _result(study, law: str, reference: dict[str, float],

@@ -17,11 +17,12 @@ import re
 import signal
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import TypeVar
 
 from .. import __version__
-from ..core import Metrics
-from .single import RunSettings, point_metrics
+from .single import point_metrics
 
+P, R = TypeVar("P"), TypeVar("R")      # a point (RunSettings by default), its result (Metrics)
 INSTALL_HINT = ('pip install "dask[distributed]" (or the map-cluster extra: '
                 'pip install "drill_sim[map-cluster]")')
 
@@ -39,9 +40,9 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
-def compute(points: Sequence[RunSettings], *, workers: int = 1,
+def compute(points: Sequence[P], *, workers: int = 1,
             scheduler: str | None = None,
-            fn: Callable[[object], object] = point_metrics) -> Iterator[tuple[int, Metrics]]:
+            fn: Callable[[P], R] = point_metrics) -> Iterator[tuple[int, R]]:
     """``(position, metrics)`` of every point of ``points``, in the order they finish.
 
     ``scheduler``: the address of a Dask scheduler (``tcp://host:8786``) to send them to;
@@ -76,8 +77,8 @@ def _pool_context() -> multiprocessing.context.BaseContext:
     return multiprocessing.get_context("spawn")
 
 
-def _on_pool(points: Sequence[RunSettings], workers: int,
-             fn: Callable[[object], object]) -> Iterator[tuple[int, Metrics]]:
+def _on_pool(points: Sequence[P], workers: int,
+             fn: Callable[[P], R]) -> Iterator[tuple[int, R]]:
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context(),
                                initializer=_worker_init)
     try:
@@ -116,8 +117,8 @@ def check_address(address: str) -> str:
     return address
 
 
-def _on_dask(points: Sequence[RunSettings], address: str,
-             fn: Callable[[object], object]) -> Iterator[tuple[int, Metrics]]:
+def _on_dask(points: Sequence[P], address: str,
+             fn: Callable[[P], R]) -> Iterator[tuple[int, R]]:
     check_address(address)
     require_distributed()
     from distributed import Client
