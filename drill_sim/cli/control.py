@@ -56,6 +56,20 @@ UNITS = {"ssi": "-", "stick_fraction": "-", "mean_rop_m_h": "m/h", "mean_rop": "
          "mse_pa": "Pa", "mse_mpa": "MPa", "window_s": "s"}
 
 
+def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
+    """How the loop is closed, as drill_sim control and drill_sim tune take it: the law's
+    sample period, what it measures, the string."""
+    parser.add_argument("--sample-period", type=number, default=DEFAULT_SAMPLE_PERIOD_S,
+                        help="the controller's sample period h [s], 1e-4 to 0.1; default "
+                             f"{DEFAULT_SAMPLE_PERIOD_S:g} (the rig node's 1 kHz)")
+    parser.add_argument("--sensor-profile", choices=sensor_profiles(), default="ideal",
+                        help="what the controller measures (msg_docs/sensors.md); default ideal")
+    parser.add_argument("--sensor-seed", type=int, default=0,
+                        help="seed of the sensors' noise, >= 0; default 0")
+    parser.add_argument("--string-model", choices=STRING_MODELS, default="lumped",
+                        help="the string model; default lumped")
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--preset", default="base", help="shipped preset or preset YAML; base")
     parser.add_argument("--rpm", type=number, help="one steady point instead of the set: "
@@ -82,9 +96,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--switch-on", type=number, default=0.0,
                         help="for --rpm/--wob-kn: the drive's stiff loop until this time [s], "
                              "then the law (bumpless); default 0, the law from the start")
-    parser.add_argument("--sample-period", type=number, default=DEFAULT_SAMPLE_PERIOD_S,
-                        help="the controller's sample period h [s], 1e-4 to 0.1; default "
-                             f"{DEFAULT_SAMPLE_PERIOD_S:g} (the rig node's 1 kHz)")
     parser.add_argument("--top-drive-inertia", type=number, default=None,
                         help="J_TD [kg m^2], 1 to 1e5; default the preset's (base 2900)")
     parser.add_argument("--motor-torque-max-knm", type=number, default=None,
@@ -93,12 +104,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--motor-torque-min-knm", type=number, default=None,
                         help="its smallest [kN m], -1000 to 0 (0: cannot brake); default the "
                              "preset's (base -60)")
-    parser.add_argument("--sensor-profile", choices=sensor_profiles(), default="ideal",
-                        help="what the controller measures (msg_docs/sensors.md); default ideal")
-    parser.add_argument("--sensor-seed", type=int, default=0,
-                        help="seed of the sensors' noise, >= 0; default 0")
-    parser.add_argument("--string-model", choices=STRING_MODELS, default="lumped",
-                        help="the string model; default lumped")
+    add_loop_arguments(parser)
     parser.add_argument("--out", type=Path, help="the table as .csv or .json")
     parser.add_argument("--plot", type=Path, help="bit speed and surface torque of every law "
                         "against time (.png, .pdf...); one file per scenario, suffixed with its "

@@ -10,13 +10,12 @@ import time
 from pathlib import Path
 
 from ..control import LAWS
-from ..control.evaluation import DEFAULT_SAMPLE_PERIOD_S, sensor_profiles
 from ..control.tuning import pipe_impedance
 from ..core import load_preset
-from ..core.distributed import STRING_MODELS
 from ..study import gain_tuning as gt
 from ..study.parallel import ClusterError, available_cores
 from .checks import number, output_file, plot_file, sample_period, whole
+from .control import add_loop_arguments
 from .errors import UsageError
 
 TUNABLE = [name for name, cls in LAWS.items() if cls.GAINS]
@@ -43,11 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                         help="run the trials on this Dask cluster instead (as drill_sim map)")
     parser.add_argument("--seed", type=int, default=0, help="the sampler's seed, >= 0; default 0")
-    parser.add_argument("--sample-period", default=DEFAULT_SAMPLE_PERIOD_S, type=number,
-                        help="the law's h [s], 1e-4 to 0.1; default 0.001")
-    parser.add_argument("--sensor-profile", default="ideal", choices=sensor_profiles())
-    parser.add_argument("--sensor-seed", type=int, default=0, help="the sensors' noise seed, >= 0")
-    parser.add_argument("--string-model", default="lumped", choices=STRING_MODELS)
+    add_loop_arguments(parser)
     parser.add_argument("--plot", default=None,
                         help="a figure of the study (.png): each trial's objective and the best "
                              "so far, and the trials in the first two gains' plane")
