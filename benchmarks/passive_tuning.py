@@ -14,9 +14,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from drill_sim.control import make_law
+from drill_sim.control import default_gains, make_law
 from drill_sim.control.impedance import top_boundary
-from drill_sim.control.reference import reference_gains
+from drill_sim.control.reference import (
+    COMPENSATED_FRACTION,
+    DERIVATIVE_CORNER_PER_MODE,
+    reference_gains,
+)
 from drill_sim.control.tuning import pipe_impedance, torsional_modes_hz
 from drill_sim.core import DEFAULT_DT, load_preset
 from drill_sim.core.distributed import geometry_waves
@@ -25,8 +29,10 @@ from drill_sim.core.stability_distributed import string_modes
 
 def lumped_rule(law: str, j: float, f1: float) -> dict[str, float] | None:
     """The lumped rule's filters (``control.reference``), where they differ."""
-    return {"soft_speed": {"compensated_inertia_kg_m2": 0.95 * j, "derivative_corner_hz": 25 * f1},
-            "z_torque": {"torque_lowpass_hz": 2.5}}.get(law)
+    return {"soft_speed": {"compensated_inertia_kg_m2": COMPENSATED_FRACTION * j,
+                           "derivative_corner_hz": DERIVATIVE_CORNER_PER_MODE * f1},
+            "z_torque": {"torque_lowpass_hz": default_gains("z_torque")["torque_lowpass_hz"]},
+            }.get(law)
 
 
 def main() -> int:
