@@ -80,6 +80,11 @@ def test_position_mode_needs_the_distributed_string(base_preset):
                                              "position"):
         rig.set_hook_mode("sideways")
     assert rig.hook_mode == "force"
+    rig = Rig(base_preset.rig, string_model="distributed", geometry=base_preset.string)
+    for bad in (float("nan"), float("inf"), 11.0):
+        with pytest.raises(ParameterError, match="block_speed_m_s = "):
+            rig.set_hook_mode("position", bad)
+    assert (rig.hook_mode, rig.sim.hook_position) == ("force", False)     # unchanged
 
 
 def test_back_to_force_holds_the_load_measured_then(base_preset):
