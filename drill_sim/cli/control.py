@@ -47,13 +47,22 @@ COLUMNS = (
     ("surface_torque_rms_nm", "Ts rms kN·m", "{:11.3f}", "N·m"),
     ("saturation_fraction", "sat", "{:5.2f}", "-"),
     ("mse_pa", "MSE MPa", "{:8.1f}", "Pa"),
+    ("motor_torque_rms_nm", "Tm rms kN·m", "{:11.3f}", "N·m"),
+    ("torque_rate_rms_nm_s", "dTm/dt kN·m/s", "{:13.1f}", "N·m/s"),
+    ("drive_energy_j", "E MJ", "{:6.2f}", "J"),
+    ("settling_time_s", "settle s", "{:8.2f}", "s"),
 )
-TABLE_SCALE = {"surface_torque_p2p_nm": 1e-3, "surface_torque_rms_nm": 1e-3, "mse_pa": 1e-6}
+TABLE_SCALE = {"surface_torque_p2p_nm": 1e-3, "surface_torque_rms_nm": 1e-3, "mse_pa": 1e-6,
+               "motor_torque_rms_nm": 1e-3, "torque_rate_rms_nm_s": 1e-3,
+               "drive_energy_j": 1e-6}
 UNITS = {"ssi": "-", "stick_fraction": "-", "mean_rop_m_h": "m/h", "mean_rop": "m/h",
          "mean_bit_speed_rpm": "rpm", "min_bit_speed_rpm": "rpm", "max_bit_speed_rpm": "rpm",
          "surface_torque_p2p_nm": "N·m", "surface_torque_rms_nm": "N·m",
          "mean_surface_torque_nm": "N·m", "saturation_fraction": "-", "saturation_time_s": "s",
-         "mse_pa": "Pa", "mse_mpa": "MPa", "window_s": "s"}
+         "mse_pa": "Pa", "mse_mpa": "MPa", "window_s": "s",
+         "motor_torque_rms_nm": "N·m", "motor_torque_p2p_nm": "N·m",
+         "torque_rate_rms_nm_s": "N·m/s", "time_at_torque_limit_fraction": "-",
+         "drive_energy_j": "J", "settling_time_s": "s"}
 
 
 def add_loop_arguments(parser: argparse.ArgumentParser) -> None:
@@ -223,7 +232,8 @@ def _ros_row(preset, scenario: Scenario, settings: LoopSettings, user: str | Non
     return sample_metrics(preset, series, scenario.metrics_from_s, drive,
                           law="user" if user else settings.law, scenario=scenario.name,
                           sensor_profile=settings.sensor_profile,
-                          string_model=settings.string_model)
+                          string_model=settings.string_model,
+                          events_s=scenario.settling_events_s)
 
 
 def _scenarios(args: argparse.Namespace) -> list[Scenario]:
@@ -339,7 +349,7 @@ def _print_table(document: dict, args: argparse.Namespace) -> None:
         cells = []
         for (key, _, fmt, _), w in zip(COLUMNS, widths, strict=True):
             value = row[key]
-            cells.append(f"{'-':>{w}}" if value != value else
+            cells.append(f"{'-':>{w}}" if value is None or value != value else
                          f"{fmt.format(value * TABLE_SCALE.get(key, 1.0)):>{w}}")
         lines.append(f"{row['scenario']:<{scen_w}} {row['name']:<10} " + " ".join(cells))
     for label, path in (("table", args.out), ("plot", args.plot)):

@@ -11,18 +11,26 @@ def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
                      top_drive_speed: np.ndarray, wob: np.ndarray, tob: np.ndarray,
                      surface_torque: np.ndarray, stuck: np.ndarray, *, units: dict[str, str],
                      title: str, motor_torque: np.ndarray | None = None,
-                     marks: dict[float, str] | None = None) -> None:
+                     marks: dict[float, str] | None = None,
+                     speed_set: np.ndarray | None = None,
+                     torque_limits: tuple[float, float] | None = None) -> None:
     """Write a three-panel PNG; ``units`` labels the axes (time, speed, force, torque);
     ``motor_torque``, when given, is drawn with the torques (the top drive's motor);
-    ``marks``: time -> label, drawn as dashed vertical lines (a controller switched on)."""
+    ``marks``: time -> label, drawn as dashed vertical lines (a controller switched on);
+    ``speed_set``: the speed set-point, drawn with the speeds; ``torque_limits``: the drive's
+    (min, max) motor torque, which adds a fourth panel: the motor torque against them."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(10, 7.5), constrained_layout=True)
+    drive = motor_torque is not None and torque_limits is not None
+    fig, axes = plt.subplots(4 if drive else 3, 1, sharex=True,
+                             figsize=(10, 9.5 if drive else 7.5), constrained_layout=True)
     ax = axes[0]
     ax.plot(time, bit_speed, lw=0.8, label="bit")
     ax.plot(time, top_drive_speed, "k--", lw=0.8, label="top drive")
+    if speed_set is not None:
+        ax.plot(time, speed_set, color="tab:red", lw=1.0, label="set-point")
     if np.any(stuck):
         ax.fill_between(time, 0, 1, where=stuck, color="tab:red", alpha=0.15,
                         transform=ax.get_xaxis_transform(), label="stuck", step="mid")
@@ -33,11 +41,18 @@ def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
     axes[1].set_ylabel(f"WOB [{units['force']}]")
     axes[2].plot(time, tob, lw=0.8, color="tab:orange", label="on bit")
     axes[2].plot(time, surface_torque, lw=0.8, color="tab:purple", label="surface (string)")
-    if motor_torque is not None:
+    if motor_torque is not None and not drive:
         axes[2].plot(time, motor_torque, lw=0.8, color="tab:gray", label="top-drive motor")
     axes[2].set_ylabel(f"torque [{units['torque']}]")
     axes[2].legend(loc="upper right", fontsize=8)
-    axes[2].set_xlabel(f"time [{units['time']}]")
+    if drive:
+        axes[3].plot(time, motor_torque, lw=0.8, color="tab:gray", label="top-drive motor")
+        for limit in torque_limits:
+            axes[3].axhline(limit, color="tab:red", ls=":", lw=1.0)
+        axes[3].plot([], [], color="tab:red", ls=":", label="drive's limits")
+        axes[3].set_ylabel(f"motor torque [{units['torque']}]")
+        axes[3].legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel(f"time [{units['time']}]")
     for a in axes:
         a.grid(alpha=0.3)
         for at in (marks or {}):
@@ -51,9 +66,12 @@ def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
 
 def plot_rig_series(path: str | Path, series, title: str,
                     motor_torque_nm: np.ndarray | None = None,
-                    marks: dict[float, str] | None = None) -> None:
+                    marks: dict[float, str] | None = None,
+                    speed_set_rad_s: np.ndarray | None = None,
+                    torque_limits_nm: tuple[float, float] | None = None) -> None:
     """The rig's SI series (drill_sim.bag.series.RigSeries) in rpm, kN and kN m, with the
-    motor torque [N m] at its samples when given."""
+    motor torque [N m] at its samples, the speed set-point [rad/s] and the drive's motor
+    torque limits [N m] when given."""
     from ..core import RPM
     t = series.time_s - series.time_s[0]
     plot_time_series(path, t, series.bit_speed_rad_s / RPM, series.top_drive_speed_rad_s / RPM,
@@ -62,4 +80,7 @@ def plot_rig_series(path: str | Path, series, title: str,
                      units={"time": "s", "speed": "rpm", "force": "kN", "torque": "kN m"},
                      title=title,
                      motor_torque=None if motor_torque_nm is None else motor_torque_nm / 1e3,
-                     marks=marks)
+                     marks=marks,
+                     speed_set=None if speed_set_rad_s is None else speed_set_rad_s / RPM,
+                     torque_limits=None if torque_limits_nm is None else
+                     (torque_limits_nm[0] / 1e3, torque_limits_nm[1] / 1e3))

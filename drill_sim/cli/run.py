@@ -15,8 +15,10 @@ import numpy as np
 
 from ..bag.errors import BagError
 from ..bag.series import RigSeries, rig_series
+from ..bag.session_events import bag_effort, motor_torque_at
 from ..core import RPM, load_preset
 from ..core.distributed import STRING_MODELS
+from ..core.effort import SETTLING_SSI, SETTLING_WINDOW_S, Figures, effort_figures
 from ..core.stick_slip import severity_index
 from ..programs import program
 from ..session.diagnostics import drilling_regime
@@ -116,14 +118,18 @@ def run(args: argparse.Namespace) -> int:
         print("drill_sim run: no samples received from the rig", file=sys.stderr)
         return 1
     _summary(series, whence, scenario.name, f"'{preset.name}' ({string_model} string)")
+    _effort(bag, series, scenario)
     marks = {}
     if switch is not None:
         compared = _before_after(series, switch.law, switch.on_at_s)
         if compared:
             marks[switch.on_at_s] = f"{switch.law} on: SSI {compared}"
+    drive = preset.top_drive
     plot_rig_series(args.plot, series, title=f"drill_sim run: {scenario.name} on {preset.name}, "
                                              f"{string_model} string",
-                    marks=marks)
+                    marks=marks, motor_torque_nm=_motor_torque(bag, series),
+                    speed_set_rad_s=scenario.speed_set_rad_s(series.time_s - series.time_s[0]),
+                    torque_limits_nm=(drive.motor_torque_min_nm, drive.motor_torque_max_nm))
     print(f"plot written to {args.plot}")
     if bag is not None and bag.is_dir():
         print(f"session recorded to {bag}: replay it with drill_sim_replay, re-run it with "
@@ -154,6 +160,51 @@ def controller_command(preset, law: str, string_model: str = "lumped") -> list[s
             repr(float(value)) if isinstance(value, (int, float)) else value)
         cmd += ["-p", f"{name}:={text}"]
     return cmd
+
+
+def _motor_torque(bag: Path | None, series: RigSeries) -> np.ndarray | None:
+    """The motor torque [N m] at the series' samples, from the bag (None: no bag, or none
+    in it)."""
+    if bag is None or not bag.is_dir():
+        return None
+    try:
+        return motor_torque_at(bag, series)
+    except BagError:
+        return None
+
+
+def _effort(bag: Path | None, series: RigSeries, scenario) -> Figures:
+    """Print the drive's effort over the run and the settling after the scenario's switch or
+    set-point steps (``core.effort``), from the bag when there is one (it has the motor
+    torque), else from the samples received (no motor torque: those figures are missing)."""
+    events = scenario.settling_events_s
+    figures = None
+    if bag is not None and bag.is_dir():
+        try:
+            figures = bag_effort(bag, events)
+        except BagError:
+            figures = None
+    if figures is None:
+        figures = effort_figures(series.time_s - series.time_s[0], series.bit_speed_rad_s,
+                                 events_s=events)
+
+    def shown(key: str, scale: float, unit: str, fmt: str = ".2f") -> str:
+        value = figures[key]
+        return "-" if value is None else f"{format(value * scale, fmt)} {unit}"
+
+    print(f"  drive effort (whole run): motor torque rms "
+          f"{shown('motor_torque_rms_nm', 1e-3, 'kN m')}, p2p "
+          f"{shown('motor_torque_p2p_nm', 1e-3, 'kN m')}, rate rms "
+          f"{shown('torque_rate_rms_nm_s', 1e-3, 'kN m/s', '.1f')}, at its limit "
+          f"{shown('time_at_torque_limit_fraction', 100.0, '%', '.1f')} of the time, energy "
+          f"{shown('drive_energy_j', 1e-6, 'MJ')}")
+    if events:
+        settle = figures["settling_time_s"]
+        print(f"  settling after {events[-1]:g} s: " + (
+            "not settled by the end of the run" if settle is None else
+            f"{settle:.2f} s (bit-speed SSI at most {SETTLING_SSI:g} over every "
+            f"{SETTLING_WINDOW_S:g} s window from then on)"))
+    return figures
 
 
 def _before_after(series: RigSeries, law: str, on_s: float) -> str:

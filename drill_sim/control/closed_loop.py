@@ -143,6 +143,10 @@ class LoopStepper:
             self.commands.send(float(output), float(self.hook[k]))
         else:
             self.commands.send(float(self.speed_set[k]), float(self.hook[k]), float(output))
+        if k + 1 == self.switch_k and session.recorder is not None:
+            # as the node's scenario player records it: the tick before the law's first sample
+            session.recorder.record_event("controller", session.sim_time_s,
+                                          {"law": self.settings.law})
         session.tick()
         self.k = k = k + 1
         if k == self.window_k:

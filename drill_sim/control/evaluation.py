@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..core import RPM, Preset, Rig, RigSample
+from ..core.effort import Figures, effort_figures
 from ..core.stick_slip import severity_index
 from ..core.top_drive import TopDriveParameters
 from ..session.scenario import Scenario
@@ -75,6 +76,13 @@ class LoopResult:
     saturation_time_s: float          # the same as time [s] (NaN: kinematic, no torque limit)
     mse_pa: float                     # mechanical specific energy, Teale [Pa]
     window_s: float                   # length of the metrics window [s]
+    # the drive's effort and the settling over the window (``core.effort``; None: not applicable)
+    motor_torque_rms_nm: float | None = None
+    motor_torque_p2p_nm: float | None = None
+    torque_rate_rms_nm_s: float | None = None
+    time_at_torque_limit_fraction: float | None = None
+    drive_energy_j: float | None = None
+    settling_time_s: float | None = None
     series: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
 
     def row(self) -> dict[str, object]:
@@ -137,18 +145,22 @@ def loop_result(preset: Preset, scenario: Scenario, settings: LoopSettings,
         surface_torque_rms_nm=float(torque.std()),
         mean_surface_torque_nm=m["mean_surface_torque_nm"],
         saturation_fraction=saturated, saturation_time_s=saturated * window_s,
-        mse_pa=mse, window_s=window_s, series=series)
+        mse_pa=mse, window_s=window_s, series=series,
+        **_effort(series, window_k, drive, scenario))
 
 
 def sample_metrics(preset: Preset, series: Mapping[str, np.ndarray], window_start_s: float,
                    drive: TopDriveParameters | None, *, law: str, scenario: str,
-                   sensor_profile: str = "ideal", string_model: str = "lumped") -> LoopResult:
+                   sensor_profile: str = "ideal", string_model: str = "lumped",
+                   events_s: list[float] | None = None) -> LoopResult:
     """The metrics of a loop from its samples alone (what a recording of the rig's topics
     holds), over the samples from ``window_start_s`` on: SSI and bit speeds of the samples,
     stick fraction of stuck samples, ROP from the bit's depth, saturation of the applied motor
     torque at the drive's limits (``drive`` None: none), MSE from the mean WOB and the string
-    torque's work at the top, Σ T_s,k (Φ_TD,k+1 − Φ_TD,k). ``drill_sim control --ros`` scores
-    with it; the offline loop's own metrics use the kernel's running integrals instead."""
+    torque's work at the top, Σ T_s,k (Φ_TD,k+1 − Φ_TD,k); the drive's effort and the
+    settling after ``events_s`` (controller switch, set-point steps [s]) by ``core.effort``.
+    ``drill_sim control --ros`` scores with it; the offline loop's own metrics use the
+    kernel's running integrals instead."""
     t = np.asarray(series["time_s"])
     w = t >= window_start_s - 1e-9
     speed = np.asarray(series["bit_speed_rad_s"])[w]
@@ -179,4 +191,22 @@ def sample_metrics(preset: Preset, series: Mapping[str, np.ndarray], window_star
         surface_torque_p2p_nm=float(torque.max() - torque.min()),
         surface_torque_rms_nm=float(torque.std()), mean_surface_torque_nm=float(torque.mean()),
         saturation_fraction=saturated, saturation_time_s=saturated * span, mse_pa=mse,
-        window_s=float(span), series=dict(series))
+        window_s=float(span), series=dict(series),
+        **_effort(series, int(np.argmax(w)), drive, events_s or []))
+
+
+def _effort(series: Mapping[str, np.ndarray], window_k: int, drive: TopDriveParameters | None,
+            events: Scenario | list[float]) -> Figures:
+    """``core.effort``: the applied motor torque over the window, its limits unless the drive
+    is kinematic or not known; the settling over the whole run, from its last event."""
+    limited = drive is not None and drive.top_drive_mode != "kinematic"
+    t = np.asarray(series["time_s"])
+    return effort_figures(
+        t, np.asarray(series["bit_speed_rad_s"]),
+        np.asarray(series["motor_torque_nm"]) if "motor_torque_nm" in series else None,
+        np.asarray(series["top_drive_speed_rad_s"]) if "top_drive_speed_rad_s" in series
+        else None,
+        torque_limits_nm=(drive.motor_torque_min_nm, drive.motor_torque_max_nm)
+        if limited else None,
+        events_s=events.settling_events_s if isinstance(events, Scenario) else events,
+        window_start_s=float(t[window_k]) if t.size else 0.0)

@@ -152,6 +152,16 @@ class Scenario:
         return self.switch_on_s if self.switch_on_s > 0.0 else 0.5 * self.duration_s
 
     @property
+    def settling_events_s(self) -> list[float]:
+        """What a run settles after (``core.effort``): the controller's switch and every step
+        of the speed set-point (a point that is no ramp and changes the value) [s]."""
+        events = [self.controller.on_at_s] if self.controller is not None else []
+        for before, p in zip(self.speed[:-1], self.speed[1:], strict=True):
+            if not p.ramp and p.value * UNITS[p.unit] != before.value * UNITS[before.unit]:
+                events.append(p.at_s)
+        return sorted(events)
+
+    @property
     def speed_is_constant(self) -> bool:
         return len({p.value * UNITS[p.unit] for p in self.speed}) == 1
 
@@ -159,6 +169,10 @@ class Scenario:
         """(top-drive speed [rad/s], hook load [N], never negative) at time ``t_s`` [s]."""
         speed = float(_channel(self.speed, np.float64(t_s)))
         return speed, max(float(_hook(self.load, np.float64(t_s), submerged_weight_n)), 0.0)
+
+    def speed_set_rad_s(self, time_s: np.ndarray) -> np.ndarray:
+        """The top-drive speed set-point [rad/s] at these times [s]."""
+        return _channel(self.speed, np.asarray(time_s, float))
 
     def values(self, time_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(speed set-point [rad/s], W0 [kN]) at these times; ParameterError for a load given

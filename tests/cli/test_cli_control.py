@@ -15,6 +15,7 @@ from drill_sim.control.closed_loop import run_loop
 from drill_sim.control.evaluation import LoopSettings, Scenario
 from drill_sim.control.reference import reference_gains
 from drill_sim.core import load_preset
+from drill_sim.core.effort import EFFORT_KEYS
 
 POINT = ["control", "--preset", "base", "--rpm", "60", "--wob-kn", "100", "--duration", "16"]
 
@@ -104,10 +105,20 @@ def test_main_job_switches_the_scenarios_controller_on_and_compares(tmp_path):
                         "duration_s: 7.0\npoints:\n  - {at_s: 0.0, rpm: 60.0, wob_kn: 100.0}\n"
                         "controller: {law: z_torque, on_at_s: 2.5}\n")
     proc = subprocess.run([installed("drill_sim"), "run", "--scenario", str(scenario),
-                           "--no-record", "--plot", str(tmp_path / "on.png"),
+                           "--record", str(tmp_path / "bag"), "--plot", str(tmp_path / "on.png"),
                            "--string-model", "distributed"],
                           capture_output=True, text=True, timeout=180, cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+    # the drive's effort from the bag's motor torque, and the settling after the switch, in
+    # the summary as ``bag metrics`` gives them for the same bag
+    metrics = json.loads(subprocess.run(
+        [installed("drill_sim"), "bag", "metrics", str(tmp_path / "bag"), "--json"],
+        capture_output=True, text=True, timeout=60, check=True).stdout)
+    assert set(EFFORT_KEYS) <= set(metrics)
+    assert (f"drive effort (whole run): motor torque rms "
+            f"{metrics['motor_torque_rms_nm'] / 1e3:.2f} kN m") in proc.stdout, proc.stdout
+    assert metrics["time_at_torque_limit_fraction"] is not None     # the drive has limits
+    assert "settling after 2.5 s: " in proc.stdout
     assert "rig 'base' ready: distributed string" in proc.stderr
     assert "on preset 'base' (distributed string)" in proc.stdout
     assert "controller z_torque switched on at" in proc.stderr + proc.stdout   # the driver

@@ -1,5 +1,6 @@
-"""``drill_sim bag metrics``: SSI, stick fraction and means of a recorded rig session, summed a
-chunk at a time (memory does not grow with the bag)."""
+"""``drill_sim bag metrics``: SSI, stick fraction and means of a recorded rig session, and the
+drive's effort and settling (``core.effort``), summed a chunk at a time (memory does not grow
+with the bag)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,8 @@ import numpy as np
 from ...bag.errors import BagError
 from ...bag.rig_stats import RigStats
 from ...bag.series import columns
+from ...bag.session_events import session_events
+from ...core.effort import EffortStats
 from . import window
 
 HELP = "SSI, stick fraction and means of a recorded rig session (default: all of it)"
@@ -26,12 +29,21 @@ def run(args: argparse.Namespace) -> int:
     motor_sum_nm, motor_n = 0.0, 0
     with window.samples(args) as s:
         stats = RigStats(s.topic)
+        facts = session_events(s.bag)
+        effort = None
         for ns, values in s.chunks:
-            stats.add((ns - s.chunks.origin_ns) / 1e9, columns(values))
+            t = (ns - s.chunks.origin_ns) / 1e9
+            named = columns(values)
+            stats.add(t, named)
+            if effort is None:
+                effort = EffortStats(facts.torque_limits_nm, [
+                    (at - s.chunks.origin_ns) / 1e9 for at in facts.switches_ns])
+            motor = None
             if s.motor is not None:
                 motor = s.motor.at(ns)[:, 0]
-                motor = motor[np.isfinite(motor)]
-                motor_sum_nm, motor_n = motor_sum_nm + float(motor.sum()), motor_n + motor.size
+                finite = motor[np.isfinite(motor)]
+                motor_sum_nm, motor_n = motor_sum_nm + float(finite.sum()), motor_n + finite.size
+            effort.add(t, named["bit_speed_rad_s"], motor, named["top_drive_speed_rad_s"])
     status = s.verdict(args, stats.problems())
     if status:
         return status
@@ -40,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
     m = stats.result()
     if motor_n:                        # the top drive's motor, when the bag has its torque
         m["mean_motor_torque_nm"] = motor_sum_nm / motor_n
+    m.update((effort or EffortStats()).result())
     problems = list(dict.fromkeys(s.problems + stats.problems()))
     if args.json:
         print(json.dumps({**m, "problems": problems}))
@@ -48,5 +61,5 @@ def run(args: argparse.Namespace) -> int:
           + (" (partial: the bag is damaged)" if problems else ""))
     for key, value in m.items():
         if key not in ("samples", "duration_s"):
-            print(f"  {key:<24} {value:.6g}")
+            print(f"  {key:<29} {'-' if value is None else format(value, '.6g')}")
     return 0

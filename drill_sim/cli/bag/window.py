@@ -57,6 +57,7 @@ class Samples:
 
     topic: str
     chunks: Windowed
+    bag: Bag
     problems: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     # the rig's stamped topics beside (motor torque, measured quantities), matched by stamp
@@ -79,5 +80,5 @@ def samples(args: argparse.Namespace) -> Iterator[Samples]:
         name = joint_topic(bag, args.topic)
         problems, notes = partial.known(bag)
         window = Window(args.start, args.end, args.last)
-        yield Samples(name, Windowed(joint_chunks(bag, name, problems), window), problems,
-                      notes, matched(bag, name))
+        yield Samples(name, Windowed(joint_chunks(bag, name, problems), window), bag,
+                      problems, notes, matched(bag, name))

@@ -1,0 +1,110 @@
+"""What a session's bag says about its drive and its events, for the figures ``core.effort``
+gives: the drive's motor-torque limits (the recorded start parameters) and the stamps of the
+controller switches the rig recorded on its ``~/events``. A bag the rig node did not write has
+neither (the figures that need them are then None)."""
+
+from __future__ import annotations
+
+import json
+import math
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..core.effort import EffortStats, Figures
+from ..wire import rig_topics
+from .bag import Bag, opened
+from .series import columns, joint_chunks, joint_topic
+from .stamped_series import MOTOR, matched
+
+
+@dataclass(frozen=True)
+class SessionEvents:
+    """``torque_limits_nm``: (min, max) of the drive's motor torque [N·m], None for a kinematic
+    drive or a bag without the rig's parameters; ``switches_ns``: header-stamp times [ns] of the
+    controller switches; ``events``: every recorded event as (stamp [ns], kind, values)."""
+
+    torque_limits_nm: tuple[float, float] | None = None
+    switches_ns: tuple[int, ...] = ()
+    events: list[tuple[int, str, dict]] = field(default_factory=list)
+
+
+def session_events(bag: Bag) -> SessionEvents:
+    """The drive's limits and the recorded events of a session bag (empty when it has none)."""
+    meta = bag.metadata
+    params = meta.get("parameters", {})
+    session = meta.get("session", {})
+    limits = None
+    try:
+        low = float(params["motor_torque_min_nm"])
+        high = float(params["motor_torque_max_nm"])
+        if params.get("top_drive_mode", "kinematic") != "kinematic" and math.isfinite(low) \
+                and math.isfinite(high) and low < high:
+            limits = (low, high)
+    except (KeyError, ValueError):
+        pass
+    if "node" not in session:
+        return SessionEvents(limits)
+    epoch_ns = int(session.get("stamp_epoch_ns", "0") or 0)
+    topic = session.get("events_topic", rig_topics.EVENTS_TOPIC.under(session["node"]))
+    events: list[tuple[int, str, dict]] = []
+    if topic in bag.topic_types():
+        for m in bag.messages({topic}, []):
+            event = _decoded(m.data)
+            if event is not None:
+                at = event.get("sim_time_s")
+                if isinstance(at, (int, float)) and math.isfinite(at):
+                    events.append((epoch_ns + round(at * 1e9), str(event.get("event")),
+                                   event.get("values") or {}))
+    return SessionEvents(limits, tuple(ns for ns, kind, _ in events if kind == "controller"),
+                         events)
+
+
+def _decoded(data: bytes) -> dict | None:
+    """A std_msgs/String event of the rig (JSON), None if it is not one."""
+    try:
+        (n,) = struct.unpack_from("<I", data, 4)
+        event = json.loads(data[8:8 + n - 1].decode("utf-8"))
+    except (struct.error, UnicodeDecodeError, ValueError):
+        return None
+    return event if isinstance(event, dict) else None
+
+
+def bag_effort(bag: str | Path | Bag, events_s: list[float] | None = None,
+               window_start_s: float = -math.inf) -> Figures:
+    """``core.effort`` over a session bag, streamed: the motor torque its
+    ``~/top_drive/motor_wrench`` recorded, the limits and switches it recorded, or the
+    settling after ``events_s`` [s after the first sample] when given; the effort from
+    ``window_start_s`` [s after the first sample] on."""
+    with opened(bag) as b:
+        name = joint_topic(b, None)
+        facts = session_events(b)
+        motor = next((m for spec, m in matched(b, name, (MOTOR,)) if spec is MOTOR), None)
+        stats, origin = None, 0
+        for ns, values in joint_chunks(b, name, []):
+            if stats is None:
+                origin = int(ns[0]) if ns.size else 0
+                stats = EffortStats(facts.torque_limits_nm, events_s if events_s is not None
+                                    else [(at - origin) / 1e9 for at in facts.switches_ns],
+                                    window_start_s)
+            named = columns(values)
+            stats.add((ns - origin) / 1e9, named["bit_speed_rad_s"],
+                      None if motor is None else motor.at(ns)[:, 0],
+                      named["top_drive_speed_rad_s"])
+        return (stats or EffortStats()).result()
+
+
+def motor_torque_at(bag: str | Path | Bag, series) -> np.ndarray | None:
+    """The recorded motor torque [N·m] at the samples of a ``RigSeries`` read from this bag
+    (``series.rig_series``; NaN where none), None when the bag has no
+    ``~/top_drive/motor_wrench`` for its rig."""
+    with opened(bag) as b:
+        motor = next((m for spec, m in matched(b, series.topic, (MOTOR,)) if spec is MOTOR),
+                     None)
+        if motor is None:
+            return None
+        out = np.concatenate([motor.at(ns)[:, 0]
+                              for ns, _ in joint_chunks(b, series.topic, [])] or [[]])
+        return out if out.size == series.time_s.size else None
