@@ -20,6 +20,7 @@ setup(
         ("share/" + package_name + "/config", glob("drill_sim/config/*.yaml")
          + glob("drill_sim/config/*.json") + glob("drill_sim/config/*.xml")),
         ("share/" + package_name + "/sensor_profiles", glob("drill_sim/sensor_profiles/*.yaml")),
+        ("share/" + package_name + "/launch", glob("launch/*.launch.xml")),
     ],
     python_requires=">=3.10",
     install_requires=[

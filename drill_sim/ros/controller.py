@@ -77,6 +77,29 @@ def rig_topic(name: str) -> rig_topics.RigTopic:
                          "top drive's topics (msg_docs/node.md)") from None
 
 
+# the controller's own parameters (name, default, description); the gains are declared per law
+# as LAW.GAIN (``law_gain_defaults``)
+PARAMETERS = (
+    ("rig", rig_topics.NODE_NAME, "the rig node's name (e.g. /rig1/drill_sim)"),
+    ("law", "z_torque", f"one of {', '.join(CONTROL_LAWS)}"),
+    ("enabled", True, "false: publish nothing; true again: take over bumplessly"),
+    ("sample_period_s", 0.0, "the law's h [s]; 0: the rig's 1/rate_hz, read from its "
+                             "parameters at start"),
+    ("impedance_nm_s_rad", pipe_impedance("base"),
+     "the pipe's Z = J_p sqrt(G rho) [N m s/rad]; default the base pipe's"),
+    ("top_drive_inertia_kg_m2", 2900.0, "J_TD [kg m^2], as the rig's"),
+    ("inputs", "measured", "measured (~/measured/...) or exact (~/top_drive/...)"),
+    ("setpoint_topic", "", "TwistStamped speed set-point [rad/s]; '': the rig's "
+                           "~/cmd/top_drive"),
+    ("initial_speed_setpoint_rad_s", 2.0 * math.pi, "set-point until one arrives"),
+    ("setpoint_lockstep", False, "true: each sample waits for a set-point stamped with "
+                                 "its stamp and applies it before the step"),
+    ("manage_drive_mode", False, "set the rig's top_drive_mode: torque when enabled, "
+                                 "speed when disabled"),
+    ("diagnostics_period_s", 1.0, "/diagnostics period [s]"),
+)
+
+
 class ControllerNode(Node):
     def __init__(self) -> None:
         super().__init__(NODE_NAME)
@@ -143,27 +166,8 @@ class ControllerNode(Node):
     # ---- parameters ---------------------------------------------------------------------
     def _declare_all(self) -> dict[str, object]:
         d = ParameterDescriptor
-        plain = (
-            ("rig", rig_topics.NODE_NAME, "the rig node's name (e.g. /rig1/drill_sim)"),
-            ("law", "z_torque", f"one of {', '.join(CONTROL_LAWS)}"),
-            ("enabled", True, "false: publish nothing; true again: take over bumplessly"),
-            ("sample_period_s", 0.0, "the law's h [s]; 0: the rig's 1/rate_hz, read from its "
-                                     "parameters at start"),
-            ("impedance_nm_s_rad", pipe_impedance("base"),
-             "the pipe's Z = J_p sqrt(G rho) [N m s/rad]; default the base pipe's"),
-            ("top_drive_inertia_kg_m2", 2900.0, "J_TD [kg m^2], as the rig's"),
-            ("inputs", "measured", "measured (~/measured/...) or exact (~/top_drive/...)"),
-            ("setpoint_topic", "", "TwistStamped speed set-point [rad/s]; '': the rig's "
-                                   "~/cmd/top_drive"),
-            ("initial_speed_setpoint_rad_s", 2.0 * math.pi, "set-point until one arrives"),
-            ("setpoint_lockstep", False, "true: each sample waits for a set-point stamped with "
-                                         "its stamp and applies it before the step"),
-            ("manage_drive_mode", False, "set the rig's top_drive_mode: torque when enabled, "
-                                         "speed when disabled"),
-            ("diagnostics_period_s", 1.0, "/diagnostics period [s]"),
-        )
         values = {}
-        for name, default, text in plain:
+        for name, default, text in PARAMETERS:
             real = isinstance(default, float)         # an integer is taken where a real is
             values[name] = self.declare_parameter(
                 name, default, d(description=text, dynamic_typing=real, read_only=name in (

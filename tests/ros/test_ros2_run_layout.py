@@ -35,6 +35,8 @@ def test_colcon_build_and_ros2_run_lookup(tmp_path):
     for name in ("drill_sim_drive", "drill_sim_record", "drill_sim_replay"):
         assert (Path(found) / "lib" / "drill_sim" / name).is_file(), name
     assert (prefix / "share" / "drill_sim" / "package.xml").is_file()
+    launch = {p.name for p in (prefix / "share" / "drill_sim" / "launch").glob("*.launch.xml")}
+    assert launch == {p.name for p in (ROOT / "launch").glob("*.launch.xml")} and launch
     for config in ("drill_sim.yaml", "foxglove_layout.json", "plotjuggler_layout.xml"):
         assert (prefix / "share" / "drill_sim" / "config" / config).is_file(), config
     # run it the way ros2 run would, from the install space
