@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.effort import EffortStats, Figures
-from ..wire import rig_topics
+from ..wire import WireError, rig_topics
+from ..wire.cdr_decode import decode_command
 from .bag import Bag, opened
 from .series import columns, joint_chunks, joint_topic
 from .stamped_series import MOTOR, matched
@@ -108,3 +109,22 @@ def motor_torque_at(bag: str | Path | Bag, series) -> np.ndarray | None:
         out = np.concatenate([motor.at(ns)[:, 0]
                               for ns, _ in joint_chunks(b, series.topic, [])] or [[]])
         return out if out.size == series.time_s.size else None
+
+
+def speed_setpoints(bag: Bag, joint_topic: str) -> tuple[np.ndarray, np.ndarray]:
+    """The top-drive speed commands the rig took, as recorded on its ``~/cmd/top_drive``
+    (header stamps [ns], angular z [rad/s]); empty when the bag has none."""
+    suffix = rig_topics.JOINT_STATES.name[1:]
+    topic = rig_topics.topic("~/cmd/top_drive")
+    name = joint_topic[:-len(suffix)] + topic.name[1:] if joint_topic.endswith(suffix) else ""
+    stamps, speeds = [], []
+    if bag.topic_types().get(name) == topic.type_name:
+        for m in bag.messages({name}, []):
+            try:
+                _, sec, nanosec, six = decode_command(topic.type_name, m.data)
+            except WireError:
+                continue
+            stamps.append(sec * 1_000_000_000 + nanosec)
+            speeds.append(six[5])
+    order = np.argsort(np.asarray(stamps, np.int64), kind="stable")
+    return np.asarray(stamps, np.int64)[order], np.asarray(speeds, float)[order]

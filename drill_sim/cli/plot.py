@@ -57,9 +57,9 @@ def plot_time_series(path: str | Path, time: np.ndarray, bit_speed: np.ndarray,
         a.grid(alpha=0.3)
         for at in (marks or {}):
             a.axvline(at, color="k", ls="--", lw=0.9)
-    for at, label in (marks or {}).items():
+    for k, (at, label) in enumerate(sorted((marks or {}).items())):
         axes[0].annotate(label, (at, 1.0), xycoords=("data", "axes fraction"),
-                         xytext=(4, -12), textcoords="offset points", fontsize=9)
+                         xytext=(4, -12 - 11 * (k % 3)), textcoords="offset points", fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 

@@ -11,11 +11,12 @@ import argparse
 from ...bag.errors import BagError
 from ...wire import WireError
 from ..errors import UsageError
-from . import diagnostics, export, info, metrics, plot, repair, resim
+from . import compare, diagnostics, export, info, metrics, plot, repair, resim
 
-HELP = "tools on rosbag2 MCAP bags: info, repair, metrics, export, plot, resim, diagnostics"
+HELP = ("tools on rosbag2 MCAP bags: info, repair, metrics, export, plot, compare, resim, "
+        "diagnostics")
 TOOLS = {"info": info, "repair": repair, "resim": resim, "metrics": metrics,
-         "export": export, "plot": plot, "diagnostics": diagnostics}
+         "export": export, "plot": plot, "compare": compare, "diagnostics": diagnostics}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

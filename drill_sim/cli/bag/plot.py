@@ -8,15 +8,35 @@ from pathlib import Path
 import numpy as np
 
 from ...bag.series import RigSeries
+from ...bag.session_events import session_events
 from ..plot import plot_rig_series
 from . import window
 
-HELP = "PNG of bit and top-drive speed, WOB, torques (motor too, when recorded), stuck phases"
+HELP = ("PNG of bit and top-drive speed, WOB, torques (motor too, against the drive's limits, "
+        "when recorded), stuck phases, the recorded events")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     window.add_arguments(parser)
     parser.add_argument("--out", type=Path, required=True, help="output file")
+
+
+def event_marks(bag, series: RigSeries) -> dict[float, str]:
+    """The session's recorded events (controller switch, parameter changes, reset, formation)
+    as plot marks: seconds after the series' first sample -> label."""
+    origin = round(series.time_s[0] * 1e9) if series.time_s.size else 0
+    end = series.time_s[-1] - series.time_s[0] if series.time_s.size else 0.0
+    marks: dict[float, str] = {}
+    for ns, kind, values in session_events(bag).events:
+        at = (ns - origin) / 1e9
+        if 0.0 <= at <= end:
+            label = kind + (f" {values['law']}" if "law" in values else "")
+            near = next((m for m in marks if abs(m - at) < 0.01 * max(end, 1.0)), None)
+            if near is None:
+                marks[at] = label
+            else:                            # one mark for events that would overlap
+                marks[near] = f"{marks[near]}, {label}"
+    return marks
 
 
 def run(args: argparse.Namespace) -> int:
@@ -30,6 +50,8 @@ def run(args: argparse.Namespace) -> int:
     if status:
         return status
     plot_rig_series(args.out, series, title=f"{args.bag.name}: {s.topic}",
-                    motor_torque_nm=motor)
+                    motor_torque_nm=motor, marks=event_marks(s.bag, series),
+                    torque_limits_nm=None if motor is None else
+                    session_events(s.bag).torque_limits_nm)
     print(f"plot written to {args.out}")
     return 0
