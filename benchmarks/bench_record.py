@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import os
+import re
 import shutil
 import signal
 import struct
@@ -71,7 +72,8 @@ def main() -> None:
     time.sleep(1.0)                      # let the last messages arrive, then stop the recorder
     cpu = cpu_seconds(rec.pid) - cpu0
     rec.send_signal(signal.SIGINT)
-    rec.wait(60)
+    _, err = rec.communicate(timeout=60)
+    reported = re.search(r"LOST (\d+) messages", err)
     node.destroy_node()
     rclpy.shutdown()
     values = [struct.unpack_from("<d", m.data, 4)[0] for m in read_messages(bag)]
@@ -79,7 +81,8 @@ def main() -> None:
     in_order = all(b > a for a, b in itertools.pairwise(values))
     print(f"published {n} messages in {elapsed:.2f} s ({n / elapsed:.0f} msg/s); recorded "
           f"{len(values)}, lost {missing}, {'in order' if in_order else 'OUT OF ORDER'}; "
-          f"recorder CPU {100 * cpu / (elapsed + 1.0):.0f} % of one core")
+          f"recorder CPU {100 * cpu / (elapsed + 1.0):.0f} % of one core; the recorder "
+          f"reported {reported.group(1) if reported else 0} lost")
     shutil.rmtree(tmp)
 
 

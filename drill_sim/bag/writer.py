@@ -136,6 +136,14 @@ class BagWriter:
             self._file.writer.close_chunk()
             self._file.writer.sync()
 
+    def add_metadata(self, name: str, data: dict[str, str]) -> None:
+        """A metadata record written now into the open file (and into any later one): what is
+        only known at the end of a recording, such as its losses."""
+        self._raise_closing_error()
+        self.metadata[name] = dict(data)
+        if self._file is not None:
+            self._file.writer.add_metadata(name, dict(data))
+
     def close(self) -> None:
         """Finish the file (summary, indexes) and write ``metadata.yaml``."""
         if self.closed:

@@ -31,6 +31,7 @@ MAX_SECONDS = 1e7              # --duration and --max-bag-duration [s], about 11
 MAX_BAG_SIZE = 1 << 40         # --max-bag-size [bytes], 1 TiB
 MAX_QUEUE_DEPTH = 100_000      # messages per topic
 DISCOVERY_RANGE = (0.01, 60.0)  # [s]
+MAX_GAP_LINES = 20             # gaps printed at the end; the bag keeps them all
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -49,9 +50,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", type=number, default=0.0, metavar="S",
                         help=f"stop after S seconds of wall time (0 = until Ctrl-C), up to "
                              f"{MAX_SECONDS:g}")
-    parser.add_argument("--queue-depth", type=integer, default=1000,
+    parser.add_argument("--queue-depth", type=integer, default=0,
                         help="subscription history depth per topic [messages], 1 to "
-                             f"{MAX_QUEUE_DEPTH} (default 1000)")
+                             f"{MAX_QUEUE_DEPTH}; 0 (default): keep all (nothing dropped while "
+                             "the recorder falls behind; memory grows meanwhile)")
     parser.add_argument("--discovery-period", type=number, default=0.1, metavar="S",
                         help="how often to look for new topics [s], "
                              f"{DISCOVERY_RANGE[0]:g} to {DISCOVERY_RANGE[1]:g} (default 0.1)")
@@ -66,7 +68,7 @@ def _check(args: argparse.Namespace) -> None:
     whole("-b/--max-bag-size", args.max_bag_size, 0, MAX_BAG_SIZE, unit="bytes",
           what="a file size:")
     in_range("--duration", args.duration, 0.0, MAX_SECONDS, unit="s", what="a recording time")
-    whole("--queue-depth", args.queue_depth, 1, MAX_QUEUE_DEPTH, unit="messages",
+    whole("--queue-depth", args.queue_depth, 0, MAX_QUEUE_DEPTH, unit="messages",
           what="a history depth:")
     in_range("--discovery-period", args.discovery_period, *DISCOVERY_RANGE, unit="s",
              what="a period")
@@ -94,12 +96,26 @@ def run(args: argparse.Namespace) -> int:
         print(f"drill_sim_record: {exc}", file=sys.stderr)
         return 2
     stop = init_stoppable(argv)
-    error = record(writer, TopicSelection(args.topics, args.regex, args.all, args.exclude), stop,
-                   queue_depth=args.queue_depth, duration_s=args.duration,
-                   discovery_period_s=args.discovery_period)
+    error, gaps = record(writer, TopicSelection(args.topics, args.regex, args.all,
+                                                args.exclude), stop,
+                         queue_depth=args.queue_depth, duration_s=args.duration,
+                         discovery_period_s=args.discovery_period)
     counts = ", ".join(f"{t.name} {t.count}" for t in writer.topics.values()) or "no topics"
     print(f"drill_sim_record: {sum(t.count for t in writer.topics.values())} messages in "
           f"{output} ({counts})", file=sys.stderr)
+    for gap in gaps.gaps[:MAX_GAP_LINES]:
+        print(f"drill_sim_record: {gap.line()}", file=sys.stderr)
+    if len(gaps.gaps) > MAX_GAP_LINES:
+        print(f"drill_sim_record: ... and {len(gaps.gaps) - MAX_GAP_LINES} more gaps (all in "
+              "the bag's 'recording' metadata: drill_sim bag info)", file=sys.stderr)
+    if gaps.lost:
+        by_topic = ", ".join(f"{t} {n}" for t, n in gaps.lost_by_topic().items())
+        print(f"drill_sim_record: LOST {gaps.lost} messages in all, counted from the "
+              f"publishers' sequence numbers ({by_topic})", file=sys.stderr)
+    else:
+        print("drill_sim_record: none lost (counted from the publishers' sequence numbers"
+              + (f"; not countable on {', '.join(sorted(gaps.uncounted))}: several publishers"
+                 if gaps.uncounted else "") + ")", file=sys.stderr)
     if error is not None:
         print(f"drill_sim_record: {error}", file=sys.stderr)
         return 1

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 from ..bag.bag import Bag, BagInfo
@@ -45,9 +46,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--clock", type=number, nargs="?", const=100.0, default=0.0,
                         metavar="HZ", help="publish /clock from the recorded times at HZ, up to "
                         f"{MAX_CLOCK_HZ:g} (default 100 when given)")
-    parser.add_argument("--queue-depth", type=integer, default=1000,
+    parser.add_argument("--queue-depth", type=integer, default=0,
                         help="publisher history depth per topic [messages], 1 to "
-                             f"{MAX_QUEUE_DEPTH} (default 1000)")
+                             f"{MAX_QUEUE_DEPTH}; 0 (default): keep all, so that a reliable "
+                             "subscriber that falls behind holds the replay back instead of "
+                             "losing messages")
     parser.add_argument("--wait-for", type=_count_or_all, default=1, metavar="N|all",
                         help="wait for at least N matched subscriptions before playing "
                              f"(default 1; 0 = do not wait; up to {MAX_WAIT_FOR}); all: for one "
@@ -68,7 +71,7 @@ def _check(args: argparse.Namespace) -> None:
              what="a time into the bag")
     in_range("--clock", args.clock, 0.0, MAX_CLOCK_HZ, unit="Hz",
              what="a /clock rate", note="(0: no /clock)")
-    whole("--queue-depth", args.queue_depth, 1, MAX_QUEUE_DEPTH, unit="messages",
+    whole("--queue-depth", args.queue_depth, 0, MAX_QUEUE_DEPTH, unit="messages",
           what="a history depth:")
     if args.wait_for != "all":
         whole("--wait-for", args.wait_for, 0, MAX_WAIT_FOR, unit="subscriptions",
@@ -138,13 +141,20 @@ def _play(args: argparse.Namespace, argv: list[str], bag: Path, source: Bag, fou
         if missing:
             print(f"drill_sim_replay: {missing}; playing anyway", file=sys.stderr)
         progress = _Progress(found.start_ns, found.end_ns)
+        started = time.monotonic()
         while not stop:
             player.play_once(stop, progress)
             if not args.loop:
                 break
         progress.close()
+        wall_s = time.monotonic() - started
         player.wait_acked(10.0)
         print(f"drill_sim_replay: published {player.sent} messages", file=sys.stderr)
+        span_s = (found.end_ns - found.start_ns) * 1e-9 - args.start_offset
+        if player.held_back and not args.loop and wall_s > 0 and span_s > 0:
+            print(f"drill_sim_replay: held back by its subscribers (a keep-all history was "
+                  f"full {player.held_back} times): played at {span_s / wall_s:.2f}x of the "
+                  f"recording, asked {args.rate:g}x; nothing was dropped", file=sys.stderr)
         if player.problems and not args.partial:
             return 1                                # damage the bag's info did not show
     finally:

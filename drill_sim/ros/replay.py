@@ -16,12 +16,13 @@ from dataclasses import dataclass
 
 import yaml
 from rclpy.duration import Duration
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 
 from ..bag.bag import Bag
 from ..wire import cdr, rig_topics
-from .topics import UnknownType, message_class, profile_from_dicts, rclpy_qos
+from .topics import KEEP_ALL, UnknownType, message_class, profile_from_dicts, rclpy_qos
 
 
 @dataclass(frozen=True)
@@ -31,7 +32,7 @@ class PlayOptions:
     rate: float = 1.0             # playback speed relative to the recording
     start_offset_s: float = 0.0   # start this far into the bag
     clock_hz: float = 0.0         # /clock publishing rate; 0: no /clock
-    queue_depth: int = 1000       # publisher history depth per topic [messages]
+    queue_depth: int = 0          # publisher history per topic [messages]; 0: keep all
     wait_for: int = 1             # matched subscriptions to wait for before playing
     wait_for_every_topic: bool = False   # and at least one on every topic played
     wait_timeout_s: float = 30.0  # play anyway after this long waiting
@@ -63,6 +64,7 @@ class Player(Node):
             if options.clock_hz else None
         self.encode_clock = cdr.clock()
         self.sent = 0
+        self.held_back = 0          # publishes the middleware refused while a history was full
         self.problems: list[str] = []             # damage met while playing
 
     # ---- before: subscribers -----------------------------------------------------------
@@ -130,13 +132,30 @@ class Player(Node):
                     time.sleep(min(due, next_clock) - now)
                 if stop:
                     return
-                pub.publish(bytes(data))
+                if not self._publish(pub, bytes(data), stop):
+                    return
                 self.sent += 1
                 progress(log)
         for problem in problems:
             if problem not in self.problems:
                 self.problems.append(problem)
                 self.get_logger().warning(problem)
+
+    def _publish(self, pub, data: bytes, stop: list[int]) -> bool:
+        """Publish, waiting while a keep-all history is full (a reliable subscriber has not
+        taken the earlier messages yet: the middleware refuses after blocking a while); False
+        if asked to stop meanwhile."""
+        while True:
+            try:
+                pub.publish(data)
+                return True
+            except _rclpy.RCLError:
+                if self.options.queue_depth != KEEP_ALL:
+                    raise
+                self.held_back += 1
+                if stop:
+                    return False
+                time.sleep(0.001)
 
     def _publish_clock(self, bag_ns: float) -> None:
         if self.clock_pub is not None:

@@ -77,10 +77,17 @@ def profile_dict(qos: QoSProfile) -> dict:
     return wire_qos(qos).as_dict()
 
 
+KEEP_ALL = 0         # a ``depth`` of the player and the recorder: keep every message
+
+
 def profile_from_dicts(profiles: list[dict] | None, depth: int) -> QoSProfile:
     """The profile to publish recorded messages with, as rosbag2's player chooses it
-    (``wire.qos.player_qos``)."""
-    return rclpy_qos(player_qos(profiles, depth))
+    (``wire.qos.player_qos``); ``depth`` KEEP_ALL: no message is dropped from the history
+    (a reliable publisher then waits for its slowest subscriber: flow control)."""
+    profile = rclpy_qos(player_qos(profiles, max(depth, 1)))
+    if depth == KEEP_ALL:
+        profile.history = HistoryPolicy.KEEP_ALL
+    return profile
 
 
 def subscription_qos(publishers: list[TopicEndpointInfo], depth: int) -> QoSProfile:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import json
 import struct
 import subprocess
 import time
@@ -21,6 +22,7 @@ from rosgraph_msgs.msg import Clock
 from rosutil import NodeProcess, wait_for
 from std_msgs.msg import Float64
 
+from drill_sim.bag.bag import Bag
 from drill_sim.bag.reader import read_messages
 from drill_sim.bag.writer import BagWriter, qos_profile
 
@@ -81,22 +83,25 @@ def test_replay_loses_no_message_and_keeps_the_timing(ros, tmp_path, rate):
     assert "published 2020 messages" in out
 
 
-def test_a_rig_session_replayed_into_the_recorder_comes_back_byte_for_byte(ros, tmp_path):
+@pytest.mark.parametrize("rate", [2.0, 5.0])
+def test_a_rig_session_replayed_into_the_recorder_comes_back_byte_for_byte(ros, tmp_path,
+                                                                           rate):
     """A second and a half of a rig session (every output topic at 1 kHz, 1500 messages each)
-    replayed into drill_sim_record: every message arrives, in order, with the same bytes.
-    The player waits until the recorder has subscribed to every topic (the recorder discovers
-    them one by one), and plays at half speed: 4 000 messages/s, a fifth of the recorder's
-    documented capacity (20-25 000/s on two free cores), so that a machine with one core busy
-    still takes them all (at 2x, 16 000/s, a busy core lost a third)."""
+    replayed faster than recorded into drill_sim_record with the defaults: every message
+    arrives, in order, with the same bytes, read back by another reader; the recorder says
+    none was lost. The player waits until the recorder has subscribed to every topic (it
+    discovers them one by one); both keep every message in their histories, so a recorder
+    that falls behind (a busy core) holds the player back instead of losing messages."""
     rig_bag(tmp_path / "session", 1500, prefix="/twox")
     recorded = tmp_path / "recorded"
     with NodeProcess("drill_sim_record", "-e", "^/twox/", "-o", str(recorded)) as rec:
         run = subprocess.run([installed("drill_sim_replay"), str(tmp_path / "session"),
-                              "--rate", "0.5", "--wait-for", "all"], capture_output=True,
+                              "--rate", str(rate), "--wait-for", "all"], capture_output=True,
                              text=True, timeout=120)
         assert run.returncode == 0, run.stderr
         code, out = rec.stop()
     assert code == 0, out
+    assert "none lost" in out, out
 
     def by_topic(bag):
         found: dict[str, list[bytes]] = {}
@@ -212,6 +217,44 @@ def test_record_captures_selected_topics_raw_with_their_qos(ros, tmp_path):
         values = [TYPESTORE.deserialize_cdr(raw, c.msgtype).data
                   for c, _, raw in r.messages() if c.topic == "/rec/a"]
     assert values == [float(i) for i in range(500)]
+    assert "none lost" in out, out
+    with Bag.open(bag) as b:
+        assert b.metadata["recording"]["lost_messages"] == "0"
+
+
+def test_record_reports_exactly_the_messages_it_never_received(ros, tmp_path):
+    """A history of one message on the recorder's side and a publisher that sends 20 000 as
+    fast as it can: messages are overwritten before the recorder takes them. Every gap it
+    reports (printed, and in the bag's metadata) is exactly a gap in the numbers the bag holds,
+    read back by another library."""
+    bag = tmp_path / "rec"
+    with NodeProcess("drill_sim_record", "/gaps/a", "--queue-depth", "1", "-o", str(bag)) as rec:
+        a = ros.create_publisher(Float64, "/gaps/a", RELIABLE)
+        wait_for(lambda: a.get_subscription_count(), ros, 30, "the recorder to subscribe")
+        for i in range(20_000):
+            a.publish(Float64(data=float(i)))
+        assert a.wait_for_all_acked(Duration(seconds=30))
+        code, out = rec.stop()
+    assert code == 0, out
+    with Reader(bag) as r:
+        values = [int(TYPESTORE.deserialize_cdr(raw, c.msgtype).data)
+                  for c, _, raw in r.messages()]
+    expected = [b - a - 1 for a, b in itertools.pairwise(values) if b > a + 1]
+    assert expected, "the recorder kept up: no gap to report"
+    with Bag.open(bag) as b:
+        recording = b.metadata["recording"]
+    gaps = json.loads(recording["gaps"])
+    assert [g[1] for g in gaps] == expected
+    assert all(g[0] == "/gaps/a" and g[2] <= g[3] for g in gaps)
+    assert int(recording["lost_messages"]) == sum(expected)
+    # the publisher numbers its messages from 1: the first one kept is value + 1
+    assert json.loads(recording["first_sequence_by_topic"]) == {"/gaps/a": values[0] + 1}
+    assert f"LOST {sum(expected)} messages" in out, out
+    assert f"lost {expected[0]} on /gaps/a between t = " in out, out
+    info = subprocess.run([installed("drill_sim"), "bag", "info", str(bag)],
+                          capture_output=True, text=True, timeout=60)
+    assert f"Lost in recording: {sum(expected)} messages never reached the recorder" \
+        in info.stdout, info.stdout
 
 
 def test_record_refuses_an_existing_bag_and_bad_arguments(tmp_path):

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
+import json
 from pathlib import Path
 
 from ...bag.bag import Bag, BagInfo
@@ -36,6 +37,7 @@ def render(i: BagInfo) -> str:
              f"Start:             {start}",
              f"Messages:          {i.message_count}"
              + (" (readable; more were lost: see Problems)" if i.problems else ""),
+             *_loss_lines(i),
              "Topic information:"]
     width = max((len(t.name) for t in i.topics.values()), default=0)
     for t in i.topics.values():
@@ -53,6 +55,23 @@ def render(i: BagInfo) -> str:
                      "intact chunk, keeping the originals):")
         lines += [f"  {p}" for p in i.problems]
     return "\n".join(lines)
+
+
+def _loss_lines(i: BagInfo) -> list[str]:
+    """What the recorder never received (its ``recording`` record, ``bag.losses``)."""
+    recording = i.metadata.get("recording", {})
+    if "lost_messages" not in recording:
+        return []
+    lost = recording["lost_messages"]
+    if lost == "0":
+        return ["Lost in recording: none (counted from the publishers' sequence numbers)"]
+    try:
+        by_topic = ", ".join(f"{t} {n}" for t, n in json.loads(
+            recording.get("lost_by_topic", "{}")).items())
+    except ValueError:
+        by_topic = "?"
+    return [f"Lost in recording: {lost} messages never reached the recorder ({by_topic}; "
+            "each gap under Metadata 'recording')"]
 
 
 def _stamp_lines(i: BagInfo) -> list[str]:
