@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ...bag.series import RigSeries
-from ...bag.session_events import session_events
+from ...bag.session_events import SessionEvents, session_events
 from ..plot import plot_rig_series
 from . import window
 
@@ -21,13 +21,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, required=True, help="output file")
 
 
-def event_marks(bag, series: RigSeries) -> dict[float, str]:
+def event_marks(facts: SessionEvents, series: RigSeries) -> dict[float, str]:
     """The session's recorded events (controller switch, parameter changes, reset, formation)
     as plot marks: seconds after the series' first sample -> label."""
     origin = round(series.time_s[0] * 1e9) if series.time_s.size else 0
     end = series.time_s[-1] - series.time_s[0] if series.time_s.size else 0.0
     marks: dict[float, str] = {}
-    for ns, kind, values in session_events(bag).events:
+    for ns, kind, values in facts.events:
         at = (ns - origin) / 1e9
         if 0.0 <= at <= end:
             label = kind + (f" {values['law']}" if "law" in values else "")
@@ -43,6 +43,7 @@ def run(args: argparse.Namespace) -> int:
     window.check(args, args.out)
     with window.samples(args) as s:
         chunks = list(s.chunks)
+        facts = session_events(s.bag)
         series = RigSeries.from_chunks(s.topic, chunks)
         motor = None if s.motor is None else \
             np.concatenate([s.motor.at(ns)[:, 0] for ns, _ in chunks])
@@ -50,8 +51,7 @@ def run(args: argparse.Namespace) -> int:
     if status:
         return status
     plot_rig_series(args.out, series, title=f"{args.bag.name}: {s.topic}",
-                    motor_torque_nm=motor, marks=event_marks(s.bag, series),
-                    torque_limits_nm=None if motor is None else
-                    session_events(s.bag).torque_limits_nm)
+                    motor_torque_nm=motor, marks=event_marks(facts, series),
+                    torque_limits_nm=None if motor is None else facts.torque_limits_nm)
     print(f"plot written to {args.out}")
     return 0
