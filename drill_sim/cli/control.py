@@ -309,6 +309,9 @@ def _document(args: argparse.Namespace, preset_name: str, drive, h: float,
     # the gains each law was given (reference tuning and --gain); the others are the law's
     # defaults (msg_docs/control.md)
     gains = {one.law: {k: float(v) for k, v in one.gains.items()} for one in settings}
+    if getattr(args, "ros_controller", None) is not None:
+        # the row ran the user's controller, with gains of its own: not the reference ones
+        gains = {"user": {}}
     return {"preset": preset_name, "sample_period_s": h, "sensor_profile": args.sensor_profile,
             "loop": "ros-lockstep" if args.ros else "offline",
             "sensor_seed": args.sensor_seed,
@@ -317,7 +320,8 @@ def _document(args: argparse.Namespace, preset_name: str, drive, h: float,
             "top_drive": {"top_drive_inertia_kg_m2": drive.top_drive_inertia_kg_m2,
                           "motor_torque_min_nm": drive.motor_torque_min_nm,
                           "motor_torque_max_nm": drive.motor_torque_max_nm},
-            "gains": gains, "units": UNITS, "rows": rows}
+            "gains": gains, "units": UNITS, "rows": rows,
+            "controller_command": getattr(args, "ros_controller", None)}
 
 
 def _write(path: Path, document: dict) -> None:

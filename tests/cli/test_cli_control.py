@@ -175,3 +175,25 @@ def test_the_main_jobs_controller_is_tuned_for_the_rigs_string_model():
             assert float(given[f"soft_speed.{name}"]) == value, (model, name)
     lumped = controller_command(preset, "soft_speed", "lumped")
     assert lumped != controller_command(preset, "soft_speed", "distributed")
+
+
+def test_a_users_controller_row_is_not_shown_with_the_reference_gains():
+    """``--ros --ros-controller COMMAND`` scores the user's own controller: the document names
+    its command and shows no reference gains for it (they are not what ran)."""
+    import argparse
+
+    from drill_sim.cli.control import _document
+    preset = load_preset("base")
+    settings = [LoopSettings(law="z_torque",
+                             gains=reference_gains("z_torque", preset, 2900.0))]
+    args = argparse.Namespace(sensor_profile="ideal", ros=True, sensor_seed=0,
+                              string_model="lumped", published_gains=False,
+                              ros_controller="python3 my_controller.py")
+    doc = _document(args, "base", preset.top_drive, 1e-3, [], settings)
+    assert doc["gains"] == {"user": {}}
+    assert doc["controller_command"] == "python3 my_controller.py"
+    args.ros_controller = None
+    doc = _document(args, "base", preset.top_drive, 1e-3, [], settings)
+    assert doc["gains"]["z_torque"]["kp_nm_s_rad"] == pytest.approx(
+        settings[0].gains["kp_nm_s_rad"])
+    assert doc["controller_command"] is None
