@@ -23,7 +23,7 @@ from rclpy.serialization import serialize_message
 from std_srvs.srv import SetBool, Trigger
 
 from ..core import NoSteadyDrilling, ParameterError
-from ..session.diagnostics import CommandCounts, other_publishers_words
+from ..session.diagnostics import CommandCounts, other_publishers_words, shared_command_words
 from ..session.recorder import RecordRefused
 from ..session.rig_session import Naming, RigSession
 from ..wire import rig_topics
@@ -77,6 +77,7 @@ class RigNode(Node):
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
         self._samples_topic = self.resolve_topic_name(rig_topics.JOINT_STATES.name)
         self._others: tuple[str, ...] = ()       # other publishers on it, last looked at
+        self._shared: tuple[tuple[str, tuple[str, ...]], ...] = ()   # shared command topics
         self.commands = CommandInbox(self, p["qos_reliability"])
         self._undecodable = self._lost_before = 0
         handlers = {"~/reset": self._on_reset, "~/pause": self._on_pause, "~/step": self._on_step}
@@ -230,12 +231,32 @@ class RigNode(Node):
             self._others = others
         return others
 
+    def shared_commands(self) -> tuple[tuple[str, tuple[str, ...]], ...]:
+        """The command topics that more than one node publishes on now, with the nodes' names;
+        said in the log when it starts and when it ends."""
+        shared = []
+        for t in rig_topics.COMMANDS:
+            names = tuple(sorted(publisher_names(self.get_publishers_info_by_topic(
+                self.resolve_topic_name(t.name)))))
+            if len(names) > 1:
+                shared.append((t.name, names))
+        shared_now = tuple(shared)
+        if shared_now != self._shared:
+            before = dict(self._shared)
+            for topic, names in shared_now:
+                if before.get(topic) != names:
+                    self.get_logger().warning(shared_command_words(topic, names))
+            for topic in set(before) - {topic for topic, _ in shared_now}:
+                self.get_logger().info(f"{topic}: one publisher again")
+            self._shared = shared_now
+        return shared_now
+
     def publish_diagnostics(self) -> None:
         """The session's status (``session.diagnostics.rig_status``) as a DiagnosticArray."""
         session, inbox = self.session, self.commands
         status = session.status(other_publishers=self.other_publishers(), commands=CommandCounts(
             inbox.received, session.commands.superseded, inbox.lost,
-            inbox.lost - self._lost_before))
+            inbox.lost - self._lost_before, self.shared_commands()))
         self._lost_before = inbox.lost
         array = DiagnosticArray(status=[DiagnosticStatus(
             level=bytes([status.level]), name=f"{self.get_name()}: rig", message=status.message,

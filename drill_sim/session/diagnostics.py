@@ -56,6 +56,8 @@ class CommandCounts:
     superseded: int = 0
     lost: int = 0
     lost_in_window: int = 0
+    # command topics with more than one publisher now: (topic, publishers' node names)
+    shared: tuple[tuple[str, tuple[str, ...]], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -63,6 +65,13 @@ class Status:
     level: int                 # OK, WARN or ERROR: the worst of the active conditions
     message: str               # every active condition, worst first; else the regime
     values: dict[str, str]     # key -> value, units in the keys
+
+
+def shared_command_words(topic: str, publishers: tuple[str, ...]) -> str:
+    """What several programs commanding one rig mean (log and /diagnostics)."""
+    return (f"{len(publishers)} publishers on {topic}: {', '.join(publishers)}; the rig takes "
+            "each one's commands as they come, so they override one another: stop all but "
+            "one")
 
 
 def other_publishers_words(others: tuple[str, ...]) -> str:
@@ -130,6 +139,8 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
                                 f"{', '.join(lockstep.missing)} stamped "
                                 f"{lockstep.stamp_ns * 1e-9:.6f} s (timeout "
                                 f"{lockstep.timeout_s:g} s)"))
+        for topic, publishers in commands.shared:
+            found.append((WARN, shared_command_words(topic, publishers)))
         if commands.lost_in_window:
             found.append((WARN, f"{commands.lost_in_window} commands lost in the last "
                                 f"{ticks.wall_s:.1f} s (they came faster than the ticks)"))
@@ -156,6 +167,7 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
         "commands_received": str(commands.received),
         "commands_superseded": str(commands.superseded),
         "commands_lost": str(commands.lost),
+        "command_topics_with_several_publishers": ",".join(t for t, _ in commands.shared),
         "sim_time_s": f"{sim_time_s:.3f}",
         "paused": str(paused).lower(),
     } | ({} if lockstep is None else {

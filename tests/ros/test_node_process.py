@@ -232,6 +232,34 @@ def test_a_second_rig_of_the_same_name_is_named_by_both(ros):
     ros.destroy_subscription(sub)
 
 
+def test_two_programs_commanding_one_rig_are_named_in_the_log_and_on_diagnostics(ros):
+    """Two nodes publishing on the rig's ~/cmd/top_drive: the rig warns once, naming both,
+    counts the topic on /diagnostics while it lasts, and says when one publisher is left."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import TwistStamped
+    seen: list[dict[str, str]] = []
+    sub = ros.create_subscription(DiagnosticArray, "/diagnostics", lambda m: seen.extend(
+        {**{v.key: v.value for v in s.values}, "message": s.message} for s in m.status
+        if s.name == "drill_sim: rig"), 10)
+    other = rclpy.create_node("second_driller")
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/two") as rig:
+        assert _line_with(rig, "ready") is not None
+        pubs = [n.create_publisher(TwistStamped, "/two/drill_sim/cmd/top_drive", 10)
+                for n in (ros, other)]
+        line = _line_with(rig, "2 publishers on ~/cmd/top_drive")
+        assert line is not None and "[WARN]" in line, line
+        assert f"/{ros.get_name()}" in line and "/second_driller" in line, line
+        wait_for(lambda: any(d.get("command_topics_with_several_publishers")
+                             == "~/cmd/top_drive" for d in seen), ros, 10.0,
+                 "the shared command topic on /diagnostics")
+        assert any("2 publishers on ~/cmd/top_drive" in d["message"] for d in seen)
+        other.destroy_publisher(pubs[1])
+        assert _line_with(rig, "~/cmd/top_drive: one publisher again") is not None
+    other.destroy_node()
+    ros.destroy_subscription(sub)
+
+
 def test_cpu_wakeup_latency_is_requested_while_the_node_runs_and_withdrawn_after(ros):
     """cpu_wakeup_latency_us:=7: while the installed node runs it holds the kernel's CPU
     latency request open with 7 us (the limit in force is then at most 7), and once it has
