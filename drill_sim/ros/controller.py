@@ -37,7 +37,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from ..control import LAWS
-from ..control.sampled_loop import SETPOINT, SPEED, SampledLoop, controller_status
+from ..control.sampled_loop import MOTOR, SETPOINT, SPEED, SampledLoop, controller_status
 from ..control.supervisor import Supervisor, law_gain_defaults
 from ..control.tuning import pipe_impedance
 from ..core.parameters import ParameterError
@@ -82,7 +82,9 @@ def rig_topic(name: str) -> rig_topics.RigTopic:
 PARAMETERS = (
     ("rig", rig_topics.NODE_NAME, "the rig node's name (e.g. /rig1/drill_sim)"),
     ("law", "z_torque", f"one of {', '.join(CONTROL_LAWS)}"),
-    ("enabled", True, "false: publish nothing; true again: take over bumplessly"),
+    ("enabled", True, "false: the law is off; each sample is answered with a hold (the last "
+                      "command) unless manage_drive_mode hands the drive back to its speed "
+                      "loop; true again: take over bumplessly"),
     ("sample_period_s", 0.0, "the law's h [s]; 0: the rig's 1/rate_hz, read from its "
                              "parameters at start"),
     ("impedance_nm_s_rad", pipe_impedance("base"),
@@ -341,6 +343,12 @@ class ControllerNode(Node):
         out, skipped = self.loop.step(self.core, stamp, slot)
         if skipped:
             self.get_logger().warn(skipped)
+        elif out is None and not self.core.enabled and not self.manage_mode:
+            # disabled, the drive in torque mode: answer the sample with a hold (the last
+            # command, else the torque the drive applies), so a rig in lockstep goes on as
+            # one in real time does, where the drive keeps its last command
+            last = self.core.last_output
+            out = last if last is not None else slot[MOTOR]
         if out is not None:
             self._publish(stamp_msg, out)
 

@@ -65,3 +65,38 @@ def test_lockstep_nodes_reproduce_the_offline_loop(ros):
     assert np.ptp(off_motor) > 30.0 and np.ptp(off_bit) > 5e-3      # the transient is real
     assert np.allclose(ros_bit, off_bit, rtol=0.0, atol=1e-9 * math.tau)
     assert np.allclose(ros_motor, off_motor, rtol=1e-12, atol=1e-6)
+
+
+def test_a_disabled_controller_answers_each_lockstep_tick_with_a_hold(ros):
+    """``enabled:=false`` (the drive in torque mode, not managed): the rig in lockstep still
+    advances, every tick answered by the controller with the torque the drive applies (a
+    hold), as a rig in real time keeps its last command; the motor torque stays put."""
+    ns, rig = "/ctoff", "/ctoff/drill_sim"
+    motor: dict[int, float] = {}
+    answers: dict[int, float] = {}
+
+    def stamp(m) -> int:
+        return m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
+
+    ros.create_subscription(WrenchStamped, f"{rig}/top_drive/motor_wrench",
+                            lambda m: motor.__setitem__(stamp(m), m.wrench.torque.z), 10000)
+    ros.create_subscription(WrenchStamped, f"{rig}/cmd/top_drive_torque",
+                            lambda m: answers.__setitem__(stamp(m), m.wrench.torque.z), 10000)
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={ns}",
+                     "-p", "top_drive_mode:=torque", "-p", "publish_clock:=true",
+                     "-p", "lockstep:=true", "-p", "lockstep_topics:=[cmd/top_drive_torque]",
+                     "-p", "lockstep_timeout_s:=5.0", "-p", "start_paused:=true"), \
+         NodeProcess("drill_sim_controller", "--ros-args", "-r", f"__ns:={ns}",
+                     "-p", f"rig:={rig}", "-p", "inputs:=exact", "-p", "enabled:=false"):
+        wait_for(lambda: ros.count_publishers(f"{rig}/cmd/top_drive_torque") > 0
+                 and ros.count_subscribers(f"{rig}/top_drive/motor_wrench") >= 2, ros, 60.0,
+                 "the rig and the controller connected")
+        assert call_service(ros, SetBool, f"{rig}/pause", SetBool.Request(data=False)).success
+        # 300 ticks in lockstep: far fewer than one lockstep timeout of 5 s would allow
+        wait_for(lambda: len(motor) >= 300, ros, 60.0, "300 lockstep ticks")
+    ticks = sorted(motor)[:300]
+    assert ticks == [k * 1_000_000 for k in range(300)]
+    held = [answers[t] for t in ticks if t in answers]
+    assert len(held) >= 295
+    assert np.allclose(held, motor[0], rtol=1e-12)            # the drive's torque, held
+    assert np.ptp([motor[t] for t in ticks]) < 1e-9 * abs(motor[0]) + 1e-9
