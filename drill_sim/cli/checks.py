@@ -80,6 +80,12 @@ def whole(name: str, value: int, low: int, high: int, *, unit: str = "", what: s
     return value
 
 
+def sensor_seed(value: int, name: str = "--sensor-seed") -> int:
+    """A sensor-noise seed, in the one range every tool and the node take."""
+    from ..core.sensors import MAX_SENSOR_SEED
+    return whole(name, value, 0, MAX_SENSOR_SEED, what="a sensor seed:")
+
+
 # ---- output files ------------------------------------------------------------------------------
 def output_file(name: str, path: Path) -> Path:
     """A file the program will write at the end: its folder must exist and be writable, and it

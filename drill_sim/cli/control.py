@@ -32,7 +32,15 @@ from ..core.distributed import STRING_MODELS
 from ..session.parameter_table import PERTURBATION_RANGE
 from ..terminal import Progress
 from .case import RPM_MAX
-from .checks import in_range, json_line, number, output_file, plot_file, sample_period, whole
+from .checks import (
+    in_range,
+    json_line,
+    number,
+    output_file,
+    plot_file,
+    sample_period,
+    sensor_seed,
+)
 from .errors import UsageError
 
 DEFAULT_LAWS = ("kinematic", "stiff_pi", "soft_speed", "z_torque")
@@ -162,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
         law_gains.update(gains.get(law, {}))
         one = LoopSettings(law=law, gains=law_gains, sample_period_s=h, top_drive=drive,
                            string_model=args.string_model, sensor_profile=args.sensor_profile,
-                           sensor_seed=whole("--sensor-seed", args.sensor_seed, 0, 2**63 - 1),
+                           sensor_seed=sensor_seed(args.sensor_seed),
                            perturbation=in_range("--perturbation", args.perturbation,
                                                  *PERTURBATION_RANGE,
                                                  what="a relative perturbation of the bit speed"))

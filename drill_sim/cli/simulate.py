@@ -15,7 +15,7 @@ from ..core.sensors import SensorBank
 from ..study.single import run_single
 from ..terminal import Progress
 from .case import Case, add_model_arguments, resolve_case
-from .checks import in_range, json_line, number, output_file, plot_file, typed
+from .checks import in_range, json_line, number, output_file, plot_file, sensor_seed, typed
 from .errors import UsageError
 from .plot import plot_time_series
 from .single import (
@@ -119,9 +119,8 @@ def _resolve_sensors(args: argparse.Namespace, case: Case) -> SensorProfile | No
                          "(--preset, --rpm, --wob-kn), not --groups")
     if args.out is None:
         raise UsageError("--sensor-profile adds measured columns to the CSV: expected --out")
-    if args.sensor_seed is not None and not 0 <= args.sensor_seed <= 2**31 - 1:
-        raise UsageError(f"--sensor-seed {args.sensor_seed}: expected a whole number from 0 "
-                         "to 2147483647")
+    if args.sensor_seed is not None:
+        sensor_seed(args.sensor_seed)
     try:
         return load_profile(args.sensor_profile)
     except ParameterError as exc:

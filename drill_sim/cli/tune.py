@@ -14,7 +14,7 @@ from ..control.tuning import pipe_impedance
 from ..core import load_preset
 from ..study import gain_tuning as gt
 from ..study.parallel import ClusterError, available_cores
-from .checks import number, output_file, plot_file, sample_period, whole
+from .checks import number, output_file, plot_file, sample_period, sensor_seed, whole
 from .control import add_loop_arguments
 from .errors import UsageError
 
@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
                       scenarios=tuple(args.scenarios.split(",")),
                       sample_period_s=sample_period(args.sample_period),
                       string_model=args.string_model, sensor_profile=args.sensor_profile,
-                      sensor_seed=whole("--sensor-seed", args.sensor_seed, 0, 2**31 - 1))
+                      sensor_seed=sensor_seed(args.sensor_seed))
     gt.named(list(job.scenarios))                    # a bad set name: refused before any run
     reference = gt.reference_for(job)
     job = gt.TrialJob(**{**job.__dict__, "gains": reference})

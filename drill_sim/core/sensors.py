@@ -61,6 +61,8 @@ S_Y, S_PREV_X, S_LAST_T, S_T0, S_HELD = range(5)
 I_INIT, I_NEXT_K, I_HEAD, I_COUNT, I_NOISE = range(5)
 W_END, W_MIN, W_MAX, W_SUM, W_N, W_VALUE, W_LEN = range(7)
 
+MAX_SENSOR_SEED = 2**31 - 1     # a non-negative 32-bit seed: every tool takes the same range
+
 
 class Measured(NamedTuple):
     """What the rig's sensors show at one call, SI; ``fresh[i]`` is True when channel
@@ -103,8 +105,10 @@ class SensorBank:
         self.profile = load_profile(profile) if isinstance(profile, str) else profile
         if not (isinstance(dt_s, (int, float)) and math.isfinite(dt_s) and dt_s > 0):
             raise ParameterError(f"dt_s = {dt_s!r}: expected a positive number of seconds")
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise ParameterError(f"sensor seed = {seed!r}: expected a whole number >= 0")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) \
+                or not 0 <= seed <= MAX_SENSOR_SEED:
+            raise ParameterError(f"sensor seed = {seed!r}: expected a whole number from 0 to "
+                                 f"{MAX_SENSOR_SEED}")
         self.dt_s, self.seed = float(dt_s), int(seed)
         n = len(CHANNELS)
         specs = [self.profile.channels[c] for c in CHANNELS]

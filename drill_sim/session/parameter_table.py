@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass
 
 from ..core import Preset
+from ..core.sensors import MAX_SENSOR_SEED
 from ..core.simulator import DEFAULT_DT
 from ..core.top_drive import MODES as TOP_DRIVE_MODES
 from ..wire import rig_topics
@@ -253,7 +254,7 @@ def specs(preset: Preset) -> list[Spec]:
              read_only="the sensors' filters and delays start with the session (bag resim "
                        "re-runs them); " + START_ONLY),
         Spec("sensor_seed", 0, "seed of the sensors' noise: the same seed, the same noise",
-             "", 0, 2**31 - 1, "a non-negative 32-bit whole number",
+             "", 0, MAX_SENSOR_SEED, "a non-negative 32-bit whole number",
              read_only="the noise streams start from it; " + START_ONLY),
         Spec("measured_publish", "every_tick", "when each ~/measured/ topic is published: "
              "every_tick (the held value, every tick) or on_sample (only in the ticks where one "

@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 from test_cli import run
 
+from drill_sim.cli.main import main
+from drill_sim.core import ParameterError, load_preset
 from drill_sim.core.sensor_profile import CHANNELS
 
 
@@ -55,3 +57,26 @@ def test_bad_sensor_options_are_refused_with_what_was_expected(tmp_path, args, w
     proc = run("simulate", *args, "--duration", "1", check=False)
     assert proc.returncode == 2 and words in proc.stderr, proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("argv", [
+    ["control", "--rpm", "60", "--wob-kn", "100", "--duration", "2"],
+    ["simulate", "--preset", "base", "--rpm", "60", "--wob-kn", "100", "--duration", "1",
+     "--sensor-profile", "surface_rig", "--out", "{tmp}/x.csv"],
+    ["tune", "--law", "z_torque", "--params", "alpha", "--trials", "1", "--out",
+     "{tmp}/t.yaml"],
+])
+def test_every_tool_takes_the_nodes_sensor_seed_range(argv, tmp_path, capsys):
+    """One range for a sensor seed, the node's parameter's: 2**31 - 1 is taken where the node
+    takes it, 2**31 is refused in one line by every tool, as by the node and the core."""
+    from drill_sim.core.sensors import MAX_SENSOR_SEED, SensorBank
+    from drill_sim.session.parameter_table import specs
+    spec = next(s for s in specs(load_preset("base")) if s.name == "sensor_seed")
+    assert (spec.low, spec.high) == (0, MAX_SENSOR_SEED) == (0, 2**31 - 1)
+    SensorBank("ideal", 1e-3, MAX_SENSOR_SEED)
+    with pytest.raises(ParameterError, match="from 0 to 2147483647"):
+        SensorBank("ideal", 1e-3, MAX_SENSOR_SEED + 1)
+    args = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    assert main([*args, "--sensor-seed", str(MAX_SENSOR_SEED + 1)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "0 to 2,147,483,647" in err, err
