@@ -12,6 +12,7 @@ from ..core.parameters import ParameterError, check_number
 from ..core.top_drive import DEFAULT_TORQUE_LIMIT_NM
 from . import LAWS, make_law
 from .laws import Law, SurfaceMeasurement
+from .policy import POLICY_LAW, Policy, PolicyLaw
 
 
 class Supervisor:
@@ -24,8 +25,10 @@ class Supervisor:
 
     def __init__(self, h_s: float, impedance_nm_s_rad: float, top_drive_inertia_kg_m2: float,
                  law: str = "z_torque", gains: Mapping[str, float] | None = None, *,
-                 enabled: bool = True, speed_set_rad_s: float = 0.0) -> None:
+                 enabled: bool = True, speed_set_rad_s: float = 0.0,
+                 policy: Policy | None = None) -> None:
         self.h_s, self.z, self.j = h_s, impedance_nm_s_rad, top_drive_inertia_kg_m2
+        self.policy = policy              # what law "policy" runs (``control.policy``)
         self.law = self.build(law, gains or {})
         self.speed_set_rad_s = check_number("speed_set_rad_s", speed_set_rad_s, low=None)
         self.law.reset(self.speed_set_rad_s)
@@ -36,6 +39,13 @@ class Supervisor:
 
     def build(self, law: str, gains: Mapping[str, float]) -> Law:
         """A law of these gains (ParameterError naming a bad one); nothing changes here."""
+        if law == POLICY_LAW:
+            if self.policy is None:
+                raise ParameterError("law = 'policy' needs a policy: expected policy = "
+                                     "package.module:callable")
+            if gains:
+                raise ParameterError(f"law 'policy' has no gains; got {sorted(gains)}")
+            return PolicyLaw(self.h_s, self.z, self.j, self.policy)
         if law in LAWS and LAWS[law].output_kind != "torque":
             torque_laws = ", ".join(n for n, c in LAWS.items() if c.output_kind == "torque")
             raise ParameterError(f"law = {law!r} is a speed pass-through, not a controller "

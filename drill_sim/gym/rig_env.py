@@ -27,14 +27,14 @@ import numpy as np
 from ..control import LAWS
 from ..control.closed_loop import LoopStepper
 from ..control.evaluation import DEFAULT_PERTURBATION, LoopSettings
+from ..control.policy import OBSERVATION
 from ..control.scenarios import named
 from ..core import load_preset
 from ..core.parameters import ParameterError, check_number
 from ..core.sensors import Measured
 from ..session.scenario import Scenario
 
-OBSERVATION = ("top_drive_speed_rad_s", "motor_torque_nm", "surface_torque_nm", "hook_load_n",
-               "speed_setpoint_rad_s")
+# the observation: one definition for the environment and a policy in the loop
 MODES = {"torque": "off", "speed": "kinematic"}        # the loop's law for each action kind
 # reward per step: -(speed * ((bit speed - set-point)/set-point)^2 + stick * stuck
 #                    + saturation * (action on a limit) + torque_rate * (|dT/dt| / 1 MN m/s)^2)

@@ -37,7 +37,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from ..control import LAWS
-from ..control.sampled_loop import MOTOR, SETPOINT, SPEED, SampledLoop, controller_status
+from ..control.policy import POLICY_LAW, PolicyLaw, load_policy
+from ..control.sampled_loop import MOTOR, SETPOINT, SPEED, SURFACE, SampledLoop, controller_status
 from ..control.supervisor import Supervisor, law_gain_defaults
 from ..control.tuning import pipe_impedance
 from ..core.parameters import ParameterError
@@ -49,6 +50,7 @@ from .topics import rclpy_qos
 
 NODE_NAME = "drill_sim_controller"
 CONTROL_LAWS = tuple(n for n, law in LAWS.items() if law.output_kind == "torque")
+SELECTABLE = (*CONTROL_LAWS, POLICY_LAW)     # what ``law`` takes: a torque law or the policy
 PROVISIONAL_PERIOD_S = 1e-3               # gains are checked against it until the rig answers
 RATE_QUERY_PERIOD_S = 0.1                 # the rig's rate_hz is asked this often until known
 HAND_BACK_TIMEOUT_S = 2.0                 # stopping: how long to wait for the rig's speed mode
@@ -81,7 +83,10 @@ def rig_topic(name: str) -> rig_topics.RigTopic:
 # as LAW.GAIN (``law_gain_defaults``)
 PARAMETERS = (
     ("rig", rig_topics.NODE_NAME, "the rig node's name (e.g. /rig1/drill_sim)"),
-    ("law", "z_torque", f"one of {', '.join(CONTROL_LAWS)}"),
+    ("law", "z_torque", f"one of {', '.join(CONTROL_LAWS)}, or policy (the callable of "
+                        "``policy``)"),
+    ("policy", "", "package.module:callable, a policy with drill_sim.gym's interface "
+                   "(observation -> motor torque [N m]), run when law is policy"),
     ("enabled", True, "false: the law is off; each sample is answered with a hold (the last "
                       "command) unless manage_drive_mode hands the drive back to its speed "
                       "loop; true again: take over bumplessly"),
@@ -110,9 +115,17 @@ class ControllerNode(Node):
         except (InvalidParameterTypeException, InvalidParameterValueException,
                 ParameterError) as exc:
             raise SystemExit(f"{NODE_NAME}: {exc}") from None
-        if p["law"] not in CONTROL_LAWS:
+        if p["law"] not in SELECTABLE:
             raise SystemExit(f"{NODE_NAME}: law = {p['law']!r}: expected one of "
-                             f"{', '.join(CONTROL_LAWS)}")
+                             f"{', '.join(SELECTABLE)}")
+        try:
+            self.policy = load_policy(p["policy"]) if p["policy"] else None
+        except ParameterError as exc:
+            raise SystemExit(f"{NODE_NAME}: {exc}") from None
+        if p["law"] == POLICY_LAW and self.policy is None:
+            raise SystemExit(f"{NODE_NAME}: law = policy needs policy = package.module:callable "
+                             "(e.g. -p policy:=drill_sim.control.policy:proportional_speed_policy)")
+        self._hooks: dict[int, float] = {}      # the hook load [N] by stamp, for a policy
         self.rig = p["rig"]
         self._p = p
         warn_unknown_given(self)
@@ -173,7 +186,7 @@ class ControllerNode(Node):
             real = isinstance(default, float)         # an integer is taken where a real is
             values[name] = self.declare_parameter(
                 name, default, d(description=text, dynamic_typing=real, read_only=name in (
-                    "rig", "sample_period_s", "inputs", "setpoint_topic",
+                    "rig", "sample_period_s", "inputs", "setpoint_topic", "policy",
                     "setpoint_lockstep", "diagnostics_period_s"))).value
             if real:
                 values[name] = _real(name, values[name])
@@ -190,7 +203,8 @@ class ControllerNode(Node):
         law = str(self.get_parameter("law").value)
         try:
             return Supervisor(h_s, p["impedance_nm_s_rad"], p["top_drive_inertia_kg_m2"], law,
-                              self._gains(law), enabled=enabled, speed_set_rad_s=speed_set_rad_s)
+                              self._gains(law), enabled=enabled, speed_set_rad_s=speed_set_rad_s,
+                              policy=self.policy)
         except ParameterError as exc:
             raise SystemExit(f"{NODE_NAME}: {exc}") from None
 
@@ -231,7 +245,7 @@ class ControllerNode(Node):
         changed = changed or {}
         return {g: _real(f"{law}.{g}", changed.get(f"{law}.{g}",
                                                    self.get_parameter(f"{law}.{g}").value))
-                for g in LAWS[law].GAINS}
+                for g in (LAWS[law].GAINS if law in LAWS else ())}
 
     def _check_every_law(self, changed: dict[str, object] | None = None) -> None:
         """Every law's gains checked, the inactive laws' too (ParameterError naming a bad
@@ -246,8 +260,8 @@ class ControllerNode(Node):
             for name in ("impedance_nm_s_rad", "top_drive_inertia_kg_m2"):
                 if name in changed:
                     raise ParameterError(f"{name} is fixed at start; restart to change it")
-            if law not in CONTROL_LAWS:
-                raise ParameterError(f"law = {law!r}: expected one of {', '.join(CONTROL_LAWS)}")
+            if law not in SELECTABLE:
+                raise ParameterError(f"law = {law!r}: expected one of {', '.join(SELECTABLE)}")
             self._check_every_law(changed)
             gains = self._gains(law, changed)
             touches_law = "law" in changed or any(n.startswith(f"{law}.") for n in changed)
@@ -329,6 +343,10 @@ class ControllerNode(Node):
     def _on_input(self, i: int, msg) -> None:
         stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
         value = msg.twist.angular.z if i in (SPEED, SETPOINT) else msg.wrench.torque.z
+        if i == SURFACE:                       # the same message's hook load, for a policy
+            self._hooks[stamp] = msg.wrench.force.z
+            if len(self._hooks) > 64:
+                self._hooks.pop(next(iter(self._hooks)))
         slot = self.loop.put(stamp, i, value)
         if slot is None:
             return
@@ -340,7 +358,14 @@ class ControllerNode(Node):
     def _sample(self, stamp_msg, slot: list) -> None:
         """One complete sample: step the law, publish its command stamped with the sample's."""
         stamp = stamp_msg.sec * 1_000_000_000 + stamp_msg.nanosec
+        law = self.core.law
+        if isinstance(law, PolicyLaw):
+            law.hook_load_n = self._hooks.get(stamp, math.nan)
+            refused = law.refused
         out, skipped = self.loop.step(self.core, stamp, slot)
+        if isinstance(law, PolicyLaw) and law.refused > refused:
+            self.get_logger().warn(f"policy: {law.last_problem}; holding the last command",
+                                   throttle_duration_sec=1.0)
         if skipped:
             self.get_logger().warn(skipped)
         elif out is None and not self.core.enabled and not self.manage_mode:

@@ -100,3 +100,63 @@ def test_a_disabled_controller_answers_each_lockstep_tick_with_a_hold(ros):
     assert len(held) >= 295
     assert np.allclose(held, motor[0], rtol=1e-12)            # the drive's torque, held
     assert np.ptp([motor[t] for t in ticks]) < 1e-9 * abs(motor[0]) + 1e-9
+
+
+def _policy_offline(policy, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """The policy through the Gymnasium environment at the rig's 1 ms: bit speed and motor
+    torque at every sample, the start and set-point of the lockstep runs above."""
+    from drill_sim.gym import RigEnv
+    env = RigEnv("base", control_period_s=1e-3, perturbation=0.0, scenarios=[
+        Scenario.of_points("step", ((0.0, 61.0),), ((0.0, 100.0),), duration_s=duration_s,
+                           window_start_s=0.5, start_rpm=60.0)])
+    obs, _ = env.reset(seed=0)
+    truncated = False
+    while not truncated:
+        obs, _, _, truncated, _ = env.step(policy(obs))
+    series = env.loop.series
+    return series["bit_speed_rad_s"], series["motor_torque_nm"]
+
+
+def test_one_policy_in_the_environment_and_against_the_nodes_gives_the_same_samples(ros):
+    """``-p law:=policy -p policy:=drill_sim.control.policy:proportional_speed_policy``: the
+    controller node runs the very callable the environment ran offline, and the rig in
+    lockstep gives the same bit speed and motor torque at every sample (to 1e-9)."""
+    from drill_sim.control.policy import proportional_speed_policy
+    ns, rig, duration = "/ctpol", "/ctpol/drill_sim", 1.0
+    bit: dict[int, float] = {}
+    motor: dict[int, float] = {}
+
+    def stamp(m) -> int:
+        return m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
+
+    ros.create_subscription(TwistStamped, f"{rig}/bit/twist",
+                            lambda m: bit.__setitem__(stamp(m), m.twist.angular.z), 10000)
+    ros.create_subscription(WrenchStamped, f"{rig}/top_drive/motor_wrench",
+                            lambda m: motor.__setitem__(stamp(m), m.wrench.torque.z), 10000)
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={ns}",
+                     "-p", "top_drive_mode:=torque", "-p", "publish_clock:=true",
+                     "-p", "lockstep:=true", "-p", "lockstep_topics:=[cmd/top_drive_torque]",
+                     "-p", "lockstep_timeout_s:=0.5", "-p", "start_paused:=true"), \
+         NodeProcess("drill_sim_controller", "--ros-args", "-r", f"__ns:={ns}",
+                     "-p", f"rig:={rig}", "-p", "inputs:=exact", "-p", "law:=policy",
+                     "-p", "policy:=drill_sim.control.policy:proportional_speed_policy",
+                     "-p", f"initial_speed_setpoint_rad_s:={61 * RPM!r}"):
+        wait_for(lambda: ros.count_publishers(f"{rig}/cmd/top_drive_torque") > 0
+                 and ros.count_subscribers(f"{rig}/top_drive/motor_wrench") >= 2
+                 and ros.count_publishers(f"{rig}/bit/twist") > 0, ros, 60.0,
+                 "the rig and the controller connected")
+        assert call_service(ros, SetBool, f"{rig}/pause", SetBool.Request(data=False)).success
+        wait_for(lambda: bit and motor and min(max(bit), max(motor)) * 1e-9 >= duration,
+                 ros, 240.0, f"{duration} s of lockstep ticks")
+    off_bit, off_motor = _policy_offline(proportional_speed_policy, duration)
+    n = len(off_bit)
+    stamps = sorted(bit)[:n]
+    assert stamps == [k * 1_000_000 for k in range(n)]
+    ros_bit = np.array([bit[s] for s in stamps])
+    ros_motor = np.array([motor[s] for s in stamps])
+    assert np.ptp(off_motor) > 30.0                       # the policy acts: not a hold
+    assert np.allclose(ros_bit, off_bit, rtol=0.0, atol=1e-9 * math.tau)
+    assert np.allclose(ros_motor, off_motor, rtol=1e-12, atol=1e-6)
+    # another policy offline is told apart: the comparison can fail
+    other_bit, _ = _policy_offline(lambda o: proportional_speed_policy(o) * 1.001, duration)
+    assert not np.allclose(ros_bit, other_bit, rtol=0.0, atol=1e-9 * math.tau)

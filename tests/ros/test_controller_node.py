@@ -113,6 +113,10 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
      "measurement_period_s = 2.0 is out of range"),
     ("drill_sim_controller", ("-p", "law:=stiff_pi", "-p", "z_torque.alpha:=-1.0"),
      "alpha = -1.0"),                         # a law that is not on is checked all the same
+    ("drill_sim_controller", ("-p", "law:=policy"),
+     "law = policy needs policy = package.module:callable"),
+    ("drill_sim_controller", ("-p", "law:=policy", "-p", "policy:=no_such_mod:f"),
+     "policy = 'no_such_mod:f': cannot import no_such_mod"),
     ("drill_sim_controller", ("-p", "sample_period_s:=abc"),
      "sample_period_s = 'abc': expected a number"),
     ("drill_sim_controller", ("--params-file", "nosuch.yaml"),
