@@ -15,6 +15,7 @@ at run time, validated, without a bump; ``/diagnostics`` reports law, saturation
 
 from __future__ import annotations
 
+import json
 import math
 import sys
 import time
@@ -394,7 +395,11 @@ class ControllerNode(Node):
                   "windup_fraction": f"{w['windup_fraction']:.4f}",
                   "speed_setpoint_rad_s": f"{self.core.speed_set_rad_s:.6g}",
                   "output_nm": "" if self.core.last_output is None
-                  else f"{self.core.last_output:.6g}"}
+                  else f"{self.core.last_output:.6g}",
+                  # what ran: the active law's gains (SI, names as the parameters'), or the
+                  # policy's callable
+                  "gains": json.dumps(self._gains(law.name)) if law.name in LAWS else "{}",
+                  "policy": self._p["policy"] if law.name == POLICY_LAW else ""}
         arr = DiagnosticArray()
         arr.header.stamp = self.get_clock().now().to_msg()
         arr.status = [DiagnosticStatus(level=level, name=f"{self.get_name()}: controller",

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections import deque
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -75,6 +76,14 @@ class RigNode(Node):
         self.send = [raw_sender(p) for p in self._outputs]     # CDR bytes, one call each
         self._next_live_refresh = 0.0
         self._diagnostics = self._publisher(rig_topics.DIAGNOSTICS_TOPIC)
+        self._own_diagnostics: deque[bytes] = deque(maxlen=4)   # ours, as published
+        if self.session.recorder is not None:
+            # what other nodes report (a controller's law, gains, activity) goes into the
+            # session's bag beside the rig's own status
+            t = rig_topics.DIAGNOSTICS_TOPIC
+            self.create_subscription(message_class(t.type_name), t.name,
+                                     self._record_others_diagnostics,
+                                     rclpy_qos(t.qos_for(self.p["qos_reliability"])), raw=True)
         self._samples_topic = self.resolve_topic_name(rig_topics.JOINT_STATES.name)
         self._others: tuple[str, ...] = ()       # other publishers on it, last looked at
         self._shared: tuple[tuple[str, tuple[str, ...]], ...] = ()   # shared command topics
@@ -267,8 +276,14 @@ class RigNode(Node):
             self._diagnostics.publish(array)
         else:                                    # serialized once: published and recorded
             data = serialize_message(array)
+            self._own_diagnostics.append(data)
             self._diagnostics.publish(data)
             session.recorder.record_diagnostics(data)
+
+    def _record_others_diagnostics(self, data: bytes) -> None:
+        """Another node's /diagnostics (ours come back too and are already recorded)."""
+        if data not in self._own_diagnostics:
+            self.session.recorder.record_diagnostics(data)
 
 
 def main(args: list[str] | None = None) -> int:

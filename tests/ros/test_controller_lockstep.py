@@ -67,10 +67,20 @@ def test_lockstep_nodes_reproduce_the_offline_loop(ros):
     assert np.allclose(ros_motor, off_motor, rtol=1e-12, atol=1e-6)
 
 
-def test_a_disabled_controller_answers_each_lockstep_tick_with_a_hold(ros):
+def test_a_disabled_controller_answers_each_lockstep_tick_with_a_hold(ros, tmp_path):
     """``enabled:=false`` (the drive in torque mode, not managed): the rig in lockstep still
     advances, every tick answered by the controller with the torque the drive applies (a
-    hold), as a rig in real time keeps its last command; the motor torque stays put."""
+    hold), as a rig in real time keeps its last command; the motor torque stays put. The
+    rig's bag keeps what the controller reported: its law, its gains, that it was off."""
+    import json
+    import subprocess
+
+    from conftest import installed
+    from diagnostic_msgs.msg import DiagnosticArray
+    reports: list[str] = []
+    ros.create_subscription(DiagnosticArray, "/diagnostics", lambda m: reports.extend(
+        s.name for s in m.status if s.name.endswith(": controller")), 10)
+    bag = tmp_path / "off"
     ns, rig = "/ctoff", "/ctoff/drill_sim"
     motor: dict[int, float] = {}
     answers: dict[int, float] = {}
@@ -85,7 +95,8 @@ def test_a_disabled_controller_answers_each_lockstep_tick_with_a_hold(ros):
     with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={ns}",
                      "-p", "top_drive_mode:=torque", "-p", "publish_clock:=true",
                      "-p", "lockstep:=true", "-p", "lockstep_topics:=[cmd/top_drive_torque]",
-                     "-p", "lockstep_timeout_s:=5.0", "-p", "start_paused:=true"), \
+                     "-p", "lockstep_timeout_s:=5.0", "-p", "start_paused:=true",
+                     "-p", f"record:={bag}"), \
          NodeProcess("drill_sim_controller", "--ros-args", "-r", f"__ns:={ns}",
                      "-p", f"rig:={rig}", "-p", "inputs:=exact", "-p", "enabled:=false"):
         wait_for(lambda: ros.count_publishers(f"{rig}/cmd/top_drive_torque") > 0
@@ -94,7 +105,17 @@ def test_a_disabled_controller_answers_each_lockstep_tick_with_a_hold(ros):
         assert call_service(ros, SetBool, f"{rig}/pause", SetBool.Request(data=False)).success
         # 300 ticks in lockstep: far fewer than one lockstep timeout of 5 s would allow
         wait_for(lambda: len(motor) >= 300, ros, 60.0, "300 lockstep ticks")
+        first = len(reports)
+        wait_for(lambda: len(reports) > first + 1, ros, 10.0, "the controller's reports")
     ticks = sorted(motor)[:300]
+    done = subprocess.run([installed("drill_sim"), "bag", "diagnostics", str(bag), "--name",
+                           ": controller", "--json"], capture_output=True, text=True,
+                          timeout=60)
+    recorded = [json.loads(line) for line in done.stdout.splitlines()]
+    assert recorded, done.stdout + done.stderr
+    values = recorded[-1]["values"]
+    assert values["law"] == "z_torque" and values["enabled"] == "False"
+    assert json.loads(values["gains"])["alpha"] > 0.0
     assert ticks == [k * 1_000_000 for k in range(300)]
     held = [answers[t] for t in ticks if t in answers]
     assert len(held) >= 295
