@@ -85,6 +85,8 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
     print(f"distributed string, preset {case.preset.name}: steady drilling at depth of cut per "
           f"blade {steady.delta_n0:.4g} L*, torque {steady.t0:.4g} C, delay "
           f"{steady.tau_n0:.4g} t*")
+    print("bit on bottom, the top held (the bit's own regenerative stability, whatever law runs "
+          "at the top):")
     print(f"{'stable' if res.stable else 'UNSTABLE'}: {len(roots)} roots of Delta_d(s) in the "
           f"box {x0:g} <= Re s <= {x1:g}, |Im s| <= {y1:g} /t* (up to {y1 * hz:.3g} Hz) besides "
           f"s = 0, {'all' if res.complete else 'NOT all'} of the "
@@ -102,8 +104,8 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
                                         for m in modes if m["kind"] == kind))
     if args.law is not None:
         print(f"  these are the closed loop's with {args.law} at the top (a root of the law's own "
-              "filters may be among them); the roots of Delta_d above are on bottom with the "
-              "top held: the bit's own stability, not the law's")
+              "filters may be among them): the law's stability, mode by mode; the roots of "
+              "Delta_d above are the bit's, on bottom with the top held")
     return 0
 
 
