@@ -51,7 +51,7 @@ def test_measured_columns_follow_the_profile_and_the_seed(tmp_path):
     (("--preset", "base", "--sensor-profile", "nope", "--out", "x.csv"),
      "neither a shipped sensor profile"),
     (("--preset", "base", "--sensor-profile", "ideal", "--sensor-seed", "-1", "--out", "x.csv"),
-     "expected a whole number from 0"),
+     "expected a sensor seed: a whole number 0 to 2,147,483,647"),
 ])
 def test_bad_sensor_options_are_refused_with_what_was_expected(tmp_path, args, words):
     proc = run("simulate", *args, "--duration", "1", check=False)
