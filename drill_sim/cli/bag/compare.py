@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -84,6 +85,8 @@ def load(path: Path) -> Session:
         events = session_events(bag)
         motor = motor_torque_at(bag, series)
         stamps, speeds = speed_setpoints(bag, name)
+    for problem in dict.fromkeys(problems):      # damage: what was readable is compared
+        print(f"drill_sim bag compare: {path}: {problem}", file=sys.stderr)
     origin = round(series.time_s[0] * 1e9)
     return Session(path, series, figures, events, motor, (stamps - origin) / 1e9, speeds)
 
