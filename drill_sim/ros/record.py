@@ -22,7 +22,7 @@ from rclpy.type_support import check_is_valid_msg_type
 from ..bag.losses import SequenceGaps
 from ..bag.writer import BagError, BagWriter
 from ..terminal import StatusLine
-from .topics import UnknownType, message_class, profile_dict, subscription_qos
+from .topics import KEEP_ALL, UnknownType, message_class, profile_dict, subscription_qos
 
 
 class TopicSelection:
@@ -143,7 +143,7 @@ class TopicRecorder(Node):
 
 
 def record(writer: BagWriter, select: TopicSelection, stop: list[int], *,
-           queue_depth: int = 1000, duration_s: float = 0.0,
+           queue_depth: int = KEEP_ALL, duration_s: float = 0.0,
            discovery_period_s: float = 0.1) -> tuple[str | None, SequenceGaps]:
     """Record into ``writer`` until ``stop`` fills (see ``stopping.init_stoppable``, which must
     have started rclpy), ``duration_s`` of wall time passes (0: no limit) or writing fails;
