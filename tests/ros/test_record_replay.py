@@ -223,16 +223,27 @@ def test_record_captures_selected_topics_raw_with_their_qos(ros, tmp_path):
 
 
 def test_record_reports_exactly_the_messages_it_never_received(ros, tmp_path):
-    """A history of one message on the recorder's side and a publisher that sends 20 000 as
-    fast as it can: messages are overwritten before the recorder takes them. Every gap it
-    reports (printed, and in the bag's metadata) is exactly a gap in the numbers the bag holds,
-    read back by another library."""
+    """A recorder frozen (SIGSTOP) while a publisher keeping the last 1000 sends 20 000, with a
+    history of one message on the recorder's side: messages are overwritten before the
+    recorder takes them, whatever the machine's speed. Every gap it reports (printed, and in
+    the bag's metadata) is exactly a gap in the numbers the bag holds, read back by another
+    library."""
+    import os
+    import signal
     bag = tmp_path / "rec"
     with NodeProcess("drill_sim_record", "/gaps/a", "--queue-depth", "1", "-o", str(bag)) as rec:
-        a = ros.create_publisher(Float64, "/gaps/a", RELIABLE)
+        a = ros.create_publisher(Float64, "/gaps/a",
+                                 QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
         wait_for(lambda: a.get_subscription_count(), ros, 30, "the recorder to subscribe")
-        for i in range(20_000):
+        for i in range(100):                    # some before the freeze: gaps come after them
             a.publish(Float64(data=float(i)))
+        assert a.wait_for_all_acked(Duration(seconds=30))
+        os.kill(rec.proc.pid, signal.SIGSTOP)
+        try:
+            for i in range(100, 20_000):
+                a.publish(Float64(data=float(i)))
+        finally:
+            os.kill(rec.proc.pid, signal.SIGCONT)
         assert a.wait_for_all_acked(Duration(seconds=30))
         code, out = rec.stop()
     assert code == 0, out
