@@ -192,7 +192,7 @@ def _effort(bag: Path | None, series: RigSeries, scenario) -> Figures:
         value = figures[key]
         return "-" if value is None else f"{format(value * scale, fmt)} {unit}"
 
-    print(f"  drive effort (whole run): motor torque rms "
+    print(f"  drive effort (whole run): motor torque rms about its mean "
           f"{shown('motor_torque_rms_nm', 1e-3, 'kN m')}, p2p "
           f"{shown('motor_torque_p2p_nm', 1e-3, 'kN m')}, rate rms "
           f"{shown('torque_rate_rms_nm_s', 1e-3, 'kN m/s', '.1f')}, at its limit "

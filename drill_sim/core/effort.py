@@ -157,7 +157,7 @@ class EffortStats:
         settled_from = 0 if unsettled.size == 0 else int(unsettled[-1]) + 1
         if settled_from >= count:
             return None
-        return (first + settled_from) * BLOCK_S + self.start_s - events[-1]
+        return round((first + settled_from) * BLOCK_S + self.start_s - events[-1], 9)
 
     def result(self) -> Figures:
         """The ``EFFORT_KEYS`` (None where a figure does not apply)."""

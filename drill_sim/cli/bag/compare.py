@@ -26,7 +26,7 @@ from ...bag.session_events import (
 )
 from ...core import RPM
 from ...core.effort import EFFORT_KEYS
-from ..checks import plot_file
+from ..checks import in_range, number, plot_file
 from ..errors import UsageError
 
 HELP = "two or more sessions overlaid, events marked, metrics and effort side by side"
@@ -69,9 +69,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="figure (default compare.png)")
     parser.add_argument("--json", action="store_true",
                         help="the table as one JSON object on stdout")
+    parser.add_argument("--start", type=number, default=0.0, metavar="S",
+                        help="the figures from S seconds after each session's first sample "
+                             "(default 0: all of it; the settling counts from the switch)")
 
 
-def load(path: Path) -> Session:
+def load(path: Path, start_s: float = 0.0) -> Session:
     """A bag's session: its rig series in memory (memory grows with the bag), figures,
     events and speed set-points."""
     with Bag.open(path) as bag:
@@ -80,8 +83,11 @@ def load(path: Path) -> Session:
         series = rig_series(bag, name, problems)
         if series.time_s.size < 2:
             raise BagError(f"{path}: fewer than two samples on {name}")
-        figures: dict[str, float | None] = dict(series.metrics())
-        figures.update(bag_effort(bag))
+        shown = series.window(start_s, None) if start_s > 0.0 else series
+        if shown.time_s.size < 2:
+            raise BagError(f"{path}: fewer than two samples from --start {start_s:g} s on")
+        figures: dict[str, float | None] = dict(shown.metrics())
+        figures.update(bag_effort(bag, window_start_s=start_s))
         events = session_events(bag)
         motor = motor_torque_at(bag, series)
         stamps, speeds = speed_setpoints(bag, name)
@@ -95,7 +101,8 @@ def run(args: argparse.Namespace) -> int:
     if len(args.bags) < 2:
         raise UsageError(f"bag compare: {len(args.bags)} bag given; expected two or more")
     plot_file("--out", args.out)
-    sessions = [load(p) for p in args.bags]
+    start = in_range("--start", args.start, 0.0, 1e9, unit="s", what="a time")
+    sessions = [load(p, start) for p in args.bags]
     table = {str(s.path): {k: s.figures.get(k) for k, *_ in TABLE} for s in sessions}
     first = sessions[0].figures
     differences = {str(s.path): {k: _difference(s.figures.get(k), first.get(k))
