@@ -115,7 +115,7 @@ def test_main_job_switches_the_scenarios_controller_on_and_compares(tmp_path):
         [installed("drill_sim"), "bag", "metrics", str(tmp_path / "bag"), "--json"],
         capture_output=True, text=True, timeout=60, check=True).stdout)
     assert set(EFFORT_KEYS) <= set(metrics)
-    assert (f"drive effort (whole run): motor torque rms "
+    assert (f"drive effort (whole run): motor torque rms about its mean "
             f"{metrics['motor_torque_rms_nm'] / 1e3:.2f} kN m") in proc.stdout, proc.stdout
     assert metrics["time_at_torque_limit_fraction"] is not None     # the drive has limits
     assert "settling after 2.5 s: " in proc.stdout
