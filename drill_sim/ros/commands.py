@@ -13,10 +13,17 @@ the latest ``depth`` per topic, and a publisher that outruns the ticks overwrite
 counted from gaps in the publisher's sequence numbers while a topic has one publisher, which
 is the case a flood comes from), and the node counts the ones it took but that a later command
 of the same topic replaced within the same tick.
+
+With ``owner_first`` (the node's ``command_owner: first``, as ros2_control lets one controller
+claim a command interface) each topic belongs to the first publisher whose command is taken:
+the others' are refused and counted by publisher, and their gaps are counted per publisher,
+until ``release`` frees the topic (its owner left the graph). Telling publishers apart needs
+the publisher's GID, which only ``publisher_take`` reads.
 """
 
 from __future__ import annotations
 
+from collections import Counter
 from typing import NamedTuple
 
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
@@ -26,6 +33,7 @@ from rclpy.type_support import check_is_valid_msg_type
 from ..wire import WireError, rig_topics
 from ..wire.cdr_decode import JointCommand, command_decoder
 from ..wire.rig_topics import RigTopic
+from .publisher_take import PublisherTake
 from .topics import message_class, rclpy_qos
 
 
@@ -45,10 +53,12 @@ class Command(NamedTuple):
 class CommandInbox:
     """Raw subscriptions to the table's command topics on ``node``, outside any executor.
 
-    reliability: the node's ``qos_reliability``; limit: most messages taken per topic and tick.
-    ``received``, ``lost`` and ``undecodable`` count since start."""
+    reliability: the node's ``qos_reliability``; limit: most messages taken per topic and tick;
+    owner_first: one publisher per topic (the module's doc). ``received``, ``lost``,
+    ``undecodable`` and ``refused`` count since start."""
 
-    def __init__(self, node: Node, reliability: str, limit: int | None = None) -> None:
+    def __init__(self, node: Node, reliability: str, limit: int | None = None,
+                 owner_first: bool = False) -> None:
         self._subs: list[tuple[RigTopic, object, type]] = []
         for t in rig_topics.COMMANDS:
             qos = t.qos_for(reliability)
@@ -59,7 +69,11 @@ class CommandInbox:
                                              rclpy_qos(qos).get_c_qos_profile())
             self._subs.append((t, handle, cls))
         self.limit = limit or max(t.qos_for(reliability).depth for t in rig_topics.COMMANDS)
-        self.received = self.lost = self.undecodable = 0
+        self.received = self.lost = self.undecodable = self.refused = 0
+        # owner_first: each topic's owner (publisher GID), and refusals not yet reported
+        self.owners: dict[str, bytes] = {}
+        self.refused_from: Counter[tuple[str, bytes]] = Counter()
+        self._publisher_take = PublisherTake() if owner_first else None
         self.last_undecodable = ""              # why the last one was: "topic: reason"
         self._last_sequence: dict[str, int] = {}
         self._context = node.context.handle
@@ -92,6 +106,8 @@ class CommandInbox:
     def take(self) -> list[Command]:
         """What arrived since the last call, at most ``limit`` per topic, each topic's in
         arrival order; undecodable messages are counted and left out."""
+        if self._publisher_take is not None:
+            return self._take_owned()
         out: list[Command] = []
         for t, take, cls, decode in self._takers:
             for _ in range(self.limit):
@@ -112,16 +128,51 @@ class CommandInbox:
                 out.append(Command(t, data, frame_id, sec, nanosec, six))
         return out
 
-    def _count_gap(self, name: str, sequence: int) -> None:
+    def _take_owned(self) -> list[Command]:
+        """``take`` with one publisher per topic: the first one's commands, the others'
+        refused (counted in ``refused`` and, until reported, ``refused_from``)."""
+        out: list[Command] = []
+        take = self._publisher_take.take
+        for t, _, _, decode in self._takers:
+            handle = self._handles[t.name]
+            for _ in range(self.limit):
+                taken = take(handle)
+                if taken is None:
+                    break
+                self.received += 1
+                owner = self.owners.setdefault(t.name, taken.publisher)
+                if taken.publisher != owner:
+                    self.refused += 1
+                    self.refused_from[(t.name, taken.publisher)] += 1
+                    continue
+                if taken.sequence:           # one publisher's numbering: exact
+                    self._count_gap(t.name, taken.sequence, owned=True)
+                try:
+                    frame_id, sec, nanosec, six = decode(taken.data)
+                except WireError as exc:
+                    self.undecodable += 1
+                    self.last_undecodable = f"{t.name}: {exc}"
+                    continue
+                out.append(Command(t, taken.data, frame_id, sec, nanosec, six))
+        return out
+
+    def release(self, name: str) -> None:
+        """Topic ``name`` (table name) is free again: the next publisher's command owns it."""
+        self.owners.pop(name, None)
+        self._last_sequence.pop(name, None)
+
+    def _count_gap(self, name: str, sequence: int, owned: bool = False) -> None:
         """Messages overwritten before they were taken: gaps in one publisher's numbering
         (while the topic has one publisher; a middleware that numbers nothing reports 0)."""
         last = self._last_sequence.get(name)
         self._last_sequence[name] = sequence
         if (last is not None and sequence > last + 1
-                and self._handles[name].get_publisher_count() == 1):
+                and (owned or self._handles[name].get_publisher_count() == 1)):
             self.lost += sequence - last - 1
 
     def destroy(self) -> None:
+        if self._publisher_take is not None:
+            self._publisher_take.close()
         self._wait_set.destroy_when_not_in_use()
         for _, handle, _ in self._subs:
             handle.destroy_when_not_in_use()

@@ -30,8 +30,10 @@ from ..session.rig_session import Naming, RigSession
 from ..wire import rig_topics
 from ..wire.rig_topics import RigTopic
 from . import loops, parameters
+from .command_owner import CommandOwnership
 from .commands import CommandInbox
 from .controller_switch import switcher
+from .publisher_take import PublisherTakeUnavailable
 from .stopping import init_stoppable
 from .topics import (
     NOT_YET_NAMED,
@@ -87,7 +89,15 @@ class RigNode(Node):
         self._samples_topic = self.resolve_topic_name(rig_topics.JOINT_STATES.name)
         self._others: tuple[str, ...] = ()       # other publishers on it, last looked at
         self._shared: tuple[tuple[str, tuple[str, ...]], ...] = ()   # shared command topics
-        self.commands = CommandInbox(self, p["qos_reliability"])
+        try:
+            self.commands = CommandInbox(self, p["qos_reliability"],
+                                         owner_first=p["command_owner"] == "first")
+        except PublisherTakeUnavailable as exc:
+            raise SystemExit(f"drill_sim_node: parameter command_owner = 'first' needs rcl's "
+                             f"take with the publisher's GID: {exc}; use command_owner:=any "
+                             "(nothing was run)") from None
+        self._ownership = (CommandOwnership(self, self.commands)
+                           if p["command_owner"] == "first" else None)
         self._undecodable = self._lost_before = 0
         handlers = {"~/reset": self._on_reset, "~/pause": self._on_pause, "~/step": self._on_step}
         for t in rig_topics.SERVICES:
@@ -161,6 +171,8 @@ class RigNode(Node):
         each recorded as received and used only if the session's rule accepts it (frame
         expected, value finite and in range), else the last valid command is held."""
         batch = self.commands.take()
+        if self._ownership is not None:
+            self._ownership.after_take()
         if self.commands.undecodable != self._undecodable:
             self._undecodable = self.commands.undecodable
             self.get_logger().warning(f"{self._undecodable} command messages could not be "
@@ -240,9 +252,10 @@ class RigNode(Node):
             self._others = others
         return others
 
-    def shared_commands(self) -> tuple[tuple[str, tuple[str, ...]], ...]:
+    def shared_commands(self, owners: dict[str, str]) -> tuple[tuple[str, tuple[str, ...]], ...]:
         """The command topics that more than one node publishes on now, with the nodes' names;
-        said in the log when it starts and when it ends."""
+        said in the log when it starts and when it ends, with the topic's owner (``owners``,
+        command_owner first) whose commands alone are taken."""
         shared = []
         for t in rig_topics.COMMANDS:
             names = tuple(sorted(publisher_names(self.get_publishers_info_by_topic(
@@ -254,7 +267,8 @@ class RigNode(Node):
             before = dict(self._shared)
             for topic, names in shared_now:
                 if before.get(topic) != names:
-                    self.get_logger().warning(shared_command_words(topic, names))
+                    self.get_logger().warning(shared_command_words(topic, names,
+                                                                   owners.get(topic)))
             for topic in set(before) - {topic for topic, _ in shared_now}:
                 self.get_logger().info(f"{topic}: one publisher again")
             self._shared = shared_now
@@ -263,9 +277,11 @@ class RigNode(Node):
     def publish_diagnostics(self) -> None:
         """The session's status (``session.diagnostics.rig_status``) as a DiagnosticArray."""
         session, inbox = self.session, self.commands
+        owners = () if self._ownership is None else self._ownership.check_graph()
         status = session.status(other_publishers=self.other_publishers(), commands=CommandCounts(
             inbox.received, session.commands.superseded, inbox.lost,
-            inbox.lost - self._lost_before, self.shared_commands()))
+            inbox.lost - self._lost_before, self.shared_commands(dict(owners)), inbox.refused,
+            owners))
         self._lost_before = inbox.lost
         array = DiagnosticArray(status=[DiagnosticStatus(
             level=bytes([status.level]), name=f"{self.get_name()}: rig", message=status.message,

@@ -58,6 +58,9 @@ class CommandCounts:
     lost_in_window: int = 0
     # command topics with more than one publisher now: (topic, publishers' node names)
     shared: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    # command_owner first: commands refused since start, and each owned topic's owner node
+    refused: int = 0
+    owners: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -67,11 +70,15 @@ class Status:
     values: dict[str, str]     # key -> value, units in the keys
 
 
-def shared_command_words(topic: str, publishers: tuple[str, ...]) -> str:
-    """What several programs commanding one rig mean (log and /diagnostics)."""
-    return (f"{len(publishers)} publishers on {topic}: {', '.join(publishers)}; the rig takes "
-            "each one's commands as they come, so they override one another: stop all but "
-            "one")
+def shared_command_words(topic: str, publishers: tuple[str, ...],
+                         owner: str | None = None) -> str:
+    """What several programs commanding one rig mean (log and /diagnostics); ``owner``: the
+    node whose commands alone are taken (``command_owner: first``)."""
+    head = f"{len(publishers)} publishers on {topic}: {', '.join(publishers)}; "
+    if owner is not None:
+        return head + f"the rig takes only {owner}'s commands (command_owner first)"
+    return head + ("the rig takes each one's commands as they come, so they override one "
+                   "another: stop all but one, or start the rig with command_owner:=first")
 
 
 def other_publishers_words(others: tuple[str, ...]) -> str:
@@ -139,8 +146,9 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
                                 f"{', '.join(lockstep.missing)} stamped "
                                 f"{lockstep.stamp_ns * 1e-9:.6f} s (timeout "
                                 f"{lockstep.timeout_s:g} s)"))
+        owners = dict(commands.owners)
         for topic, publishers in commands.shared:
-            found.append((WARN, shared_command_words(topic, publishers)))
+            found.append((WARN, shared_command_words(topic, publishers, owners.get(topic))))
         if commands.lost_in_window:
             found.append((WARN, f"{commands.lost_in_window} commands lost in the last "
                                 f"{ticks.wall_s:.1f} s (they came faster than the ticks)"))
@@ -168,6 +176,8 @@ def rig_status(sample: RigSample, metrics: dict[str, float], ticks: TickStats, *
         "commands_superseded": str(commands.superseded),
         "commands_lost": str(commands.lost),
         "command_topics_with_several_publishers": ",".join(t for t, _ in commands.shared),
+        "commands_refused": str(commands.refused),
+        "command_owners": ",".join(f"{t}={n}" for t, n in commands.owners),
         "sim_time_s": f"{sim_time_s:.3f}",
         "paused": str(paused).lower(),
     } | ({} if lockstep is None else {

@@ -202,6 +202,14 @@ def specs(preset: Preset) -> list[Spec]:
         Spec("qos_reliability", "reliable", "reliability of every rig topic",
              read_only="publishers and subscriptions are made with it; " + START_ONLY,
              choices=("reliable", "best_effort")),
+        Spec("command_owner", "any", "who may command the rig: any (every publisher's "
+             "commands are taken; several publishers on one command topic are warned about) "
+             "or first (each command topic belongs to the first publisher whose command "
+             "arrives, as ros2_control lets one controller claim a command interface: the "
+             "others' commands are refused, named in the log and counted on /diagnostics, "
+             "until the owner's publisher leaves)",
+             read_only="the command subscriptions are made with it; " + START_ONLY,
+             choices=("any", "first")),
         Spec("command_timeout_s", 1.0, "command age above which /diagnostics warns", "s",
              0.001, 3600.0),
         Spec("stick_slip_window_s", 4.0 * math.pi * t_star,

@@ -260,6 +260,66 @@ def test_two_programs_commanding_one_rig_are_named_in_the_log_and_on_diagnostics
     ros.destroy_subscription(sub)
 
 
+def test_command_owner_first_takes_one_publishers_commands_and_names_the_refused(ros):
+    """command_owner:=first: the first publisher on ~/cmd/top_drive owns it; a second node's
+    commands are refused (the top drive keeps the owner's speed), named in the log with the
+    owner, counted on /diagnostics; when the owner's publisher leaves, the next publisher's
+    command takes the topic. Fails if the rig applies the intruder's speed or cannot tell
+    the two publishers apart (one GID for both: nothing refused)."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import TwistStamped
+    owner_name, intruder = f"/{ros.get_name()}", rclpy.create_node("intruding_driller")
+    seen: list[dict[str, str]] = []
+    speeds: list[float] = []
+    subs = [ros.create_subscription(DiagnosticArray, "/diagnostics", lambda m: seen.extend(
+        {v.key: v.value for v in s.values} for s in m.status
+        if s.name == "drill_sim: rig"), 10),
+        ros.create_subscription(TwistStamped, "/own/drill_sim/top_drive/twist",
+                                lambda m: speeds.append(m.twist.angular.z), 100)]
+
+    def command(pub, speed_rad_s: float, node=None) -> None:
+        msg = TwistStamped()
+        msg.twist.angular.z = speed_rad_s
+        pub.publish(msg)
+        spin_for(node or ros, 0.02)
+
+    with NodeProcess("drill_sim_node", "--ros-args", "-r", "__ns:=/own",
+                     "-p", "command_owner:=first", "-p", "diagnostics_period_s:=0.2") as rig:
+        assert _line_with(rig, "ready") is not None
+        mine = ros.create_publisher(TwistStamped, "/own/drill_sim/cmd/top_drive", 10)
+        theirs = intruder.create_publisher(TwistStamped, "/own/drill_sim/cmd/top_drive", 10)
+        wait_for(lambda: mine.get_subscription_count() and theirs.get_subscription_count(),
+                 ros, 10.0, "the rig's command subscription")
+        command(mine, 5.0)
+        line = _line_with(rig, "~/cmd/top_drive: taking only")
+        assert line is not None and f"{owner_name}'s commands" in line, line
+        for _ in range(20):
+            command(theirs, 9.0, intruder)
+            command(mine, 5.0)
+        line = _line_with(rig, "refused")
+        assert line is not None and "from /intruding_driller" in line, line
+        assert f"{owner_name} owns it" in line and "[WARN]" in line, line
+        speeds.clear()
+        for _ in range(10):
+            command(theirs, 9.0, intruder)
+        spin_for(ros, 0.3)
+        assert speeds and all(abs(w - 5.0) < 1e-9 for w in speeds), speeds[-5:]
+        wait_for(lambda: any(int(d.get("commands_refused", "0")) >= 20 and d.get(
+            "command_owners") == f"~/cmd/top_drive={owner_name}" for d in seen), ros, 10.0,
+            "the refusals and the owner on /diagnostics")
+        ros.destroy_publisher(mine)
+        line = _line_with(rig, "its owner")
+        assert line is not None and f"{owner_name} has left" in line, line
+        command(theirs, 9.0, intruder)
+        line = _line_with(rig, "~/cmd/top_drive: taking only")
+        assert line is not None and "/intruding_driller's commands" in line, line
+        wait_for(lambda: speeds and abs(speeds[-1] - 9.0) < 1e-9, ros, 10.0,
+                 "the new owner's speed at the top drive")
+    for sub in subs:
+        ros.destroy_subscription(sub)
+    intruder.destroy_node()
+
+
 def test_cpu_wakeup_latency_is_requested_while_the_node_runs_and_withdrawn_after(ros):
     """cpu_wakeup_latency_us:=7: while the installed node runs it holds the kernel's CPU
     latency request open with 7 us (the limit in force is then at most 7), and once it has

@@ -95,7 +95,8 @@ def test_a_healthy_rig_is_ok_with_every_value(samples):
         "regime": "steady", "ssi": "0.000",
         "stick_fraction": "0.000", "off_bottom_fraction": "0.000", "command_age_s": "0.200",
         "commands_received": "120", "commands_superseded": "3", "commands_lost": "0",
-        "command_topics_with_several_publishers": "",
+        "command_topics_with_several_publishers": "", "commands_refused": "0",
+        "command_owners": "",
         "sim_time_s": "12.500", "paused": "false"}
 
 

@@ -1,0 +1,78 @@
+"""The rig's exclusive command mode (``command_owner: first``) as the log and /diagnostics see
+it: which node owns each command topic, whose commands were refused, and when an owner left.
+
+The inbox (``commands.CommandInbox`` with ``owner_first``) decides by publisher GID; this puts
+node names on the GIDs from the graph and says what happened, at most once a second.
+"""
+
+from __future__ import annotations
+
+import time
+
+from rclpy.node import Node
+
+from ..wire import rig_topics
+from .commands import CommandInbox
+from .publisher_take import endpoint_gid
+from .topics import NOT_YET_NAMED, publisher_names
+
+REPORT_PERIOD_S = 1.0       # refusals are summed and said at most this often
+LEFT = "(a publisher that has left)"
+
+
+class CommandOwnership:
+    """Names and reports the owners the inbox keeps; ``check_graph`` frees the topics whose
+    owner's publisher is gone (call it at the diagnostics period)."""
+
+    def __init__(self, node: Node, inbox: CommandInbox) -> None:
+        self._node, self._inbox = node, inbox
+        self._names: dict[str, str] = {}       # topic -> owner node, once named
+        self._next_report = 0.0
+        self._resolved = {t.name: node.resolve_topic_name(t.name) for t in rig_topics.COMMANDS}
+
+    def _publishers(self, topic: str) -> dict[bytes, str]:
+        infos = self._node.get_publishers_info_by_topic(self._resolved[topic])
+        return dict(zip((endpoint_gid(i) for i in infos), publisher_names(infos), strict=True))
+
+    def _name(self, topic: str, gid: bytes) -> str:
+        return self._publishers(topic).get(gid, LEFT)
+
+    def after_take(self) -> None:
+        """Say each new owner at once, and the commands refused since the last report."""
+        inbox, log = self._inbox, self._node.get_logger()
+        for topic, gid in inbox.owners.items():
+            if topic not in self._names:
+                name = self._name(topic, gid)
+                if name in (NOT_YET_NAMED, LEFT):
+                    name = NOT_YET_NAMED       # discovery lags the first message: named later
+                else:
+                    log.info(f"{topic}: taking only {name}'s commands (command_owner first)")
+                self._names[topic] = name
+        now = time.monotonic()
+        if not inbox.refused_from or now < self._next_report:
+            return
+        for (topic, gid), count in sorted(inbox.refused_from.items()):
+            log.warning(f"refused {count} command{'s' if count > 1 else ''} on {topic} from "
+                        f"{self._name(topic, gid)}: {self._names.get(topic, NOT_YET_NAMED)} "
+                        "owns it (command_owner first); stop the other program, or stop the "
+                        "owner to hand the topic over")
+        inbox.refused_from.clear()
+        self._next_report = now + REPORT_PERIOD_S
+
+    def check_graph(self) -> tuple[tuple[str, str], ...]:
+        """Free the topics whose owner's publisher has left (said in the log), name owners
+        that were not named yet; the owners now, (topic, node)."""
+        inbox, log = self._inbox, self._node.get_logger()
+        for topic, gid in list(inbox.owners.items()):
+            publishers = self._publishers(topic)
+            named = self._names.get(topic) not in (None, NOT_YET_NAMED)
+            if gid not in publishers and named:      # seen in the graph once, now gone
+                inbox.release(topic)
+                log.info(f"{topic}: its owner {self._names.pop(topic, NOT_YET_NAMED)} has "
+                         "left; the next publisher's command takes it (command_owner first)")
+            elif not named and gid in publishers:
+                self._names[topic] = publishers[gid]
+                if publishers[gid] != NOT_YET_NAMED:
+                    log.info(f"{topic}: taking only {publishers[gid]}'s commands "
+                             "(command_owner first)")
+        return tuple((t, self._names.get(t, NOT_YET_NAMED)) for t in inbox.owners)
