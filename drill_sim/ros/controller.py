@@ -144,10 +144,16 @@ class ControllerNode(Node):
             raise SystemExit(f"{NODE_NAME}: {exc}") from None
         self._period_known = period > 0.0
         self._deferred: tuple | None = None
+        # what the rig says of itself: in lockstep? its drive's mode (kept up to date by the
+        # mode switches this node asks for); None until it has answered
+        self._rig_lockstep = False
+        self._drive_mode: str | None = None
+        self._last_sample: tuple | None = None      # (stamp, motor torque [N m]) of the last
+        self._speed_pub = None                      # the rig's speed command, made when needed
+        self._rate_client = self.create_client(GetParameters, f"{self.rig}/get_parameters")
+        self._rate_future = None
+        self._rate_timer = self.create_timer(RATE_QUERY_PERIOD_S, self._ask_rate)
         if not self._period_known:
-            self._rate_client = self.create_client(GetParameters, f"{self.rig}/get_parameters")
-            self._rate_future = None
-            self._rate_timer = self.create_timer(RATE_QUERY_PERIOD_S, self._ask_rate)
             self.get_logger().info(f"waiting for {self.rig}'s rate_hz (sample_period_s 0: "
                                    "the law steps once a rig tick)")
         if p["inputs"] not in ("measured", "exact"):
@@ -210,29 +216,35 @@ class ControllerNode(Node):
             raise SystemExit(f"{NODE_NAME}: {exc}") from None
 
     def _ask_rate(self) -> None:
-        """Ask the rig its rate_hz until it answers; then the law at h = 1/rate_hz."""
-        if self._period_known or self._rate_future is not None:
-            return
-        if not self._rate_client.service_is_ready():
+        """Ask the rig its rate_hz, lockstep and top_drive_mode until it answers; then the
+        law at h = 1/rate_hz (unless sample_period_s gave h)."""
+        if self._rate_future is not None or not self._rate_client.service_is_ready():
             return
         self._rate_future = self._rate_client.call_async(
-            GetParameters.Request(names=["rate_hz"]))
+            GetParameters.Request(names=["rate_hz", "lockstep", "top_drive_mode"]))
         self._rate_future.add_done_callback(self._on_rate)
 
     def _on_rate(self, future) -> None:
         self._rate_future = None
         result = future.result()
-        values = [] if result is None else result.values
+        values = [] if result is None else list(result.values)
         rate = values[0].double_value if values and values[0].type == \
             ParameterType.PARAMETER_DOUBLE else math.nan
         if not (math.isfinite(rate) and rate > 0.0):
             self.get_logger().warning(f"{self.rig} gave no usable rate_hz ({rate!r}); asking "
                                       "again", throttle_duration_sec=5.0)
             return
+        self._rate_timer.cancel()
+        if len(values) == 3:
+            self._rig_lockstep = values[1].type == ParameterType.PARAMETER_BOOL and \
+                values[1].bool_value
+            if self._drive_mode is None and values[2].type == ParameterType.PARAMETER_STRING:
+                self._drive_mode = values[2].string_value
+        if self._period_known:
+            return
         old = self.core
         self.core = self._supervisor(1.0 / rate, old.enabled, old.speed_set_rad_s)
         self._period_known = True
-        self._rate_timer.cancel()
         self.get_logger().info(f"{self.rig} ticks at {rate:g} Hz: the law's h = "
                                f"{1.0 / rate:g} s")
         if self._deferred is not None:
@@ -285,8 +297,20 @@ class ControllerNode(Node):
 
     def _request_mode(self, mode: str, then) -> None:
         """Ask the rig to put its drive in ``mode`` (bumpless at the rig) as soon as its
-        parameter service is there; ``then()`` once it has."""
-        self._mode_request = (mode, then)
+        parameter service is there; ``then()`` once it has. In lockstep the last sample is
+        then answered again in the new mode: the rig moved its wait to that mode's command
+        topic when it switched, and may be waiting there for this sample's answer."""
+        def switched() -> None:
+            self._drive_mode = mode
+            if then is not None:
+                then()
+            if self._rig_lockstep and self._last_sample is not None:
+                stamp, motor_nm = self._last_sample
+                if self.core.enabled:            # the law takes over from the drive's torque
+                    self._publish(stamp, motor_nm)
+                else:
+                    self._answer_disabled(stamp, motor_nm)
+        self._mode_request = (mode, switched)
         self._send_mode()
 
     def _send_mode(self) -> None:
@@ -369,14 +393,39 @@ class ControllerNode(Node):
                                    throttle_duration_sec=1.0)
         if skipped:
             self.get_logger().warn(skipped)
-        elif out is None and not self.core.enabled and not self.manage_mode:
-            # disabled, the drive in torque mode: answer the sample with a hold (the last
-            # command, else the torque the drive applies), so a rig in lockstep goes on as
-            # one in real time does, where the drive keeps its last command
-            last = self.core.last_output
-            out = last if last is not None else slot[MOTOR]
+        elif out is None and not self.core.enabled:
+            if not self.manage_mode:
+                out = self._hold(slot[MOTOR])
+            elif self._rig_lockstep:
+                self._answer_disabled(stamp_msg, slot[MOTOR])
+        self._last_sample = (stamp_msg, slot[MOTOR])
         if out is not None:
             self._publish(stamp_msg, out)
+
+    def _hold(self, motor_nm: float) -> float:
+        """Disabled, the drive taking torque commands: a hold, the last command (else the
+        torque the drive applies), so a rig in lockstep goes on as one in real time does,
+        where the drive keeps its last command."""
+        last = self.core.last_output
+        return last if last is not None else motor_nm
+
+    def _answer_disabled(self, stamp, motor_nm: float) -> None:
+        """Disabled with manage_drive_mode, the rig in lockstep: answer the sample in the
+        drive's mode, so the rig goes on as in real time. Back on its speed loop: the speed
+        set-point this node was handed, on the rig's ~/cmd/top_drive (the drive's own
+        command then); still in torque mode (the switch not yet made): a hold."""
+        if self._drive_mode == "torque":
+            self._publish(stamp, self._hold(motor_nm))
+            return
+        if self._speed_pub is None:
+            cmd = rig_topic(SPEED_COMMAND)
+            self._speed_pub = self.create_publisher(TwistStamped, cmd.under(self.rig),
+                                                    rclpy_qos(cmd.qos_for(RELIABLE)))
+            self._speed_msg = TwistStamped()
+            self._speed_msg.header.frame_id = rig_topics.FRAME_TOP_DRIVE
+        self._speed_msg.header.stamp = stamp
+        self._speed_msg.twist.angular.z = self.core.speed_set_rad_s
+        self._speed_pub.publish(self._speed_msg)
 
     def _publish(self, stamp, torque_nm: float) -> None:
         self.msg.header.stamp = stamp

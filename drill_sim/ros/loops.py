@@ -96,9 +96,13 @@ def run_lockstep(node: RigNode, executor: EventsExecutor, stop: list[int]) -> No
     LOCKSTEP_SERVE_PERIOD_S."""
     session = node.session
     ls = session.lockstep
-    node.commands.wait_on(ls.topics)
+    watched = ls.topics
+    node.commands.wait_on(watched)
     next_serve = 0.0
     while not stop:
+        if ls.topics is not watched:         # the drive's mode moved its lockstep topic
+            watched = ls.topics
+            node.commands.wait_on(watched)
         if session.paused:
             executor.spin_once(timeout_sec=SERVE_PERIOD_S)
             node.take_commands()             # still taken and held while paused

@@ -9,11 +9,20 @@ held, recorded), but do not release the tick; they are counted. A wait longer th
 is reported once per timeout (the node warns and publishes tick k again, so a controller that
 starts or restarts late picks the loop up) and the rig keeps waiting: it never advances without
 the controller. ``msg_docs/node.md``, "Lockstep".
+
+The drive answers to the command of its mode: when ``top_drive_mode`` changes at run time
+between speed and torque (a controller with ``manage_drive_mode`` handing the drive back to
+its speed loop, or taking it), a lockstep on one of the drive's two command topics moves to
+the other, and a tick already answered on the old one stays answered.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+# the drive's command topic in each of its modes
+DRIVE_COMMAND_TOPICS = {"kinematic": "~/cmd/top_drive", "speed": "~/cmd/top_drive",
+                        "torque": "~/cmd/top_drive_torque"}
 
 
 @dataclass(frozen=True)
@@ -57,6 +66,18 @@ class Lockstep:
             return True
         self.other_stamps += 1
         return False
+
+    def follow_drive_mode(self, mode: str) -> None:
+        """The drive is now in ``mode`` (speed or torque): wait on that mode's command topic
+        instead of the other one's (when exactly one of the two is a lockstep topic)."""
+        to = DRIVE_COMMAND_TOPICS.get(mode)
+        drive = [t for t in self.topics if t in DRIVE_COMMAND_TOPICS.values()]
+        if to is None or len(drive) != 1 or drive[0] == to:
+            return
+        self.topics = tuple(to if t == drive[0] else t for t in self.topics)
+        if drive[0] in self.missing:
+            self.missing.discard(drive[0])
+            self.missing.add(to)
 
     @property
     def complete(self) -> bool:

@@ -298,6 +298,8 @@ class RigSession:
         changed = rules.apply_changes(self.rig, self.p, new)
         if new.get("top_drive_mode") != self.p.get("top_drive_mode"):
             self.commands.mode_left(self.p.get("top_drive_mode"))
+            if self.lockstep is not None:
+                self.lockstep.follow_drive_mode(str(new.get("top_drive_mode")))
         self.p = dict(new)
         if changed & set(rules.RIG_FIELDS):
             self.log.info(f"rig figures now: {self.figures()}")

@@ -378,4 +378,16 @@ BREAKS: tuple[Break, ...] = (
         "                     bytes(8))",
         "tests/ros/test_node_process.py::"
         "test_command_owner_first_takes_one_publishers_commands_and_names_the_refused"),
+    one("lockstep: the drive's wait stays on the topic of the mode it started in",
+        SESSION + "lockstep.py", "        if to is None or len(drive) != 1 or drive[0] == to:",
+        "        if True:",
+        "tests/session/test_lockstep_rule.py::"
+        "test_the_drives_lockstep_topic_follows_its_mode_and_an_answered_tick_stays_answered",
+        "tests/ros/test_controller_lockstep.py::"
+        "test_a_managed_controller_disabled_in_lockstep_answers_with_its_set_point"),
+    one("a managed controller, disabled in lockstep, stays silent", "drill_sim/ros/controller.py",
+        "            elif self._rig_lockstep:\n                self._answer_disabled(",
+        "            elif False:\n                self._answer_disabled(",
+        "tests/ros/test_controller_lockstep.py::"
+        "test_a_managed_controller_disabled_in_lockstep_answers_with_its_set_point"),
 )

@@ -23,32 +23,69 @@ RIG = f"{NS}/drill_sim"
 DURATION_S = 1.5
 
 
+def stamp(m) -> int:
+    """A message's header stamp [ns]."""
+    return m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
+
+
+def by_stamp(ros, rig: str, bit: bool = True) -> tuple[dict[int, float], dict[int, float]]:
+    """The rig's bit speed [rad/s] (if ``bit``) and motor torque [N m], by stamp, as they
+    come."""
+    bit_speed: dict[int, float] = {}
+    motor: dict[int, float] = {}
+    if bit:
+        ros.create_subscription(TwistStamped, f"{rig}/bit/twist",
+                                lambda m: bit_speed.__setitem__(stamp(m), m.twist.angular.z),
+                                10000)
+    ros.create_subscription(WrenchStamped, f"{rig}/top_drive/motor_wrench",
+                            lambda m: motor.__setitem__(stamp(m), m.wrench.torque.z), 10000)
+    return bit_speed, motor
+
+
+def lockstep_rig(ns: str, *params: str) -> NodeProcess:
+    """The installed rig in namespace ``ns``: on its /clock, in lockstep on the motor-torque
+    command, started paused; ``params``: more ``name:=value``."""
+    args = ["top_drive_mode:=torque", "publish_clock:=true", "lockstep:=true",
+            "lockstep_topics:=[cmd/top_drive_torque]", "lockstep_timeout_s:=0.5",
+            "start_paused:=true", *params]
+    return NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={ns}",
+                       *(a for p in args for a in ("-p", p)))
+
+
+def start_when_connected(ros, rig: str) -> None:
+    """Unpause the rig once the controller publishes to it and listens to it."""
+    wait_for(lambda: ros.count_publishers(f"{rig}/cmd/top_drive_torque") > 0
+             and ros.count_subscribers(f"{rig}/top_drive/motor_wrench") >= 2
+             and ros.count_publishers(f"{rig}/top_drive/motor_wrench") > 0
+             and ros.count_publishers(f"{rig}/bit/twist") > 0, ros, 60.0,
+             "the rig and the controller connected")
+    assert call_service(ros, SetBool, f"{rig}/pause", SetBool.Request(data=False)).success
+
+
+def recorded_commands(bag, topic: str, kind, value) -> dict[int, float]:
+    """The commands on ``topic`` as the rig took them (its bag records every command it
+    takes; a test's own subscription may miss some on a loaded machine), by stamp."""
+    from rclpy.serialization import deserialize_message
+
+    from drill_sim.bag.reader import read_messages
+    out = {}
+    for m in read_messages(bag):
+        if m.topic == topic:
+            msg = deserialize_message(m.data, kind)
+            out[stamp(msg)] = value(msg)
+    return out
+
+
 def test_lockstep_nodes_reproduce_the_offline_loop(ros):
     preset = load_preset("base")
     gains = reference_gains("z_torque", preset, 2900.0)
-    bit: dict[int, float] = {}
-    motor: dict[int, float] = {}
-
-    def stamp(m) -> int:
-        return m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
-
-    ros.create_subscription(TwistStamped, f"{RIG}/bit/twist",
-                            lambda m: bit.__setitem__(stamp(m), m.twist.angular.z), 10000)
-    ros.create_subscription(WrenchStamped, f"{RIG}/top_drive/motor_wrench",
-                            lambda m: motor.__setitem__(stamp(m), m.wrench.torque.z), 10000)
+    bit, motor = by_stamp(ros, RIG)
     controller = ["-p", f"rig:={RIG}", "-p", "inputs:=exact",
                   "-p", f"initial_speed_setpoint_rad_s:={61 * RPM!r}",
                   *(a for k, v in gains.items() for a in ("-p", f"z_torque.{k}:={float(v)!r}"))]
-    with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={NS}",
-                     "-p", "top_drive_mode:=torque", "-p", "publish_clock:=true",
-                     "-p", "lockstep:=true", "-p", "lockstep_topics:=[cmd/top_drive_torque]",
-                     "-p", "lockstep_timeout_s:=0.5", "-p", "start_paused:=true"), \
+    with lockstep_rig(NS), \
          NodeProcess("drill_sim_controller", "--ros-args", "-r", f"__ns:={NS}", *controller):
-        wait_for(lambda: ros.count_publishers(f"{RIG}/cmd/top_drive_torque") > 0
-                 and ros.count_subscribers(f"{RIG}/top_drive/motor_wrench") >= 2
-                 and ros.count_publishers(f"{RIG}/bit/twist") > 0, ros, 60.0,
-                 "the rig and the controller connected")
-        assert call_service(ros, SetBool, f"{RIG}/pause", SetBool.Request(data=False)).success
+        start_when_connected(ros, RIG)
         wait_for(lambda: bit and motor and min(max(bit), max(motor)) * 1e-9 >= DURATION_S,
                  ros, 240.0,
                  f"{DURATION_S} s of lockstep ticks")
@@ -82,24 +119,11 @@ def test_a_disabled_controller_answers_each_lockstep_tick_with_a_hold(ros, tmp_p
         s.name for s in m.status if s.name.endswith(": controller")), 10)
     bag = tmp_path / "off"
     ns, rig = "/ctoff", "/ctoff/drill_sim"
-    motor: dict[int, float] = {}
-
-    def stamp(m) -> int:
-        return m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
-
-    ros.create_subscription(WrenchStamped, f"{rig}/top_drive/motor_wrench",
-                            lambda m: motor.__setitem__(stamp(m), m.wrench.torque.z), 10000)
-    with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={ns}",
-                     "-p", "top_drive_mode:=torque", "-p", "publish_clock:=true",
-                     "-p", "lockstep:=true", "-p", "lockstep_topics:=[cmd/top_drive_torque]",
-                     "-p", "lockstep_timeout_s:=5.0", "-p", "start_paused:=true",
-                     "-p", f"record:={bag}"), \
+    _, motor = by_stamp(ros, rig, bit=False)
+    with lockstep_rig(ns, "lockstep_timeout_s:=5.0", f"record:={bag}"), \
          NodeProcess("drill_sim_controller", "--ros-args", "-r", f"__ns:={ns}",
                      "-p", f"rig:={rig}", "-p", "inputs:=exact", "-p", "enabled:=false"):
-        wait_for(lambda: ros.count_publishers(f"{rig}/cmd/top_drive_torque") > 0
-                 and ros.count_subscribers(f"{rig}/top_drive/motor_wrench") >= 2, ros, 60.0,
-                 "the rig and the controller connected")
-        assert call_service(ros, SetBool, f"{rig}/pause", SetBool.Request(data=False)).success
+        start_when_connected(ros, rig)
         # 300 ticks in lockstep: far fewer than one lockstep timeout of 5 s would allow
         wait_for(lambda: len(motor) >= 300, ros, 60.0, "300 lockstep ticks")
         first = len(reports)
@@ -114,19 +138,63 @@ def test_a_disabled_controller_answers_each_lockstep_tick_with_a_hold(ros, tmp_p
     assert values["law"] == "z_torque" and values["enabled"] == "False"
     assert json.loads(values["gains"])["alpha"] > 0.0
     assert ticks == [k * 1_000_000 for k in range(300)]
-    # the answers as the rig took them (its bag records every command it takes; a test's own
-    # subscription may miss some on a loaded machine)
-    from rclpy.serialization import deserialize_message
-
-    from drill_sim.bag.reader import read_messages
-    answers = {}
-    for m in read_messages(bag):
-        if m.topic == f"{rig}/cmd/top_drive_torque":
-            msg = deserialize_message(m.data, WrenchStamped)
-            answers[stamp(msg)] = msg.wrench.torque.z
+    answers = recorded_commands(bag, f"{rig}/cmd/top_drive_torque", WrenchStamped,
+                                lambda m: m.wrench.torque.z)
     assert all(t in answers for t in ticks)
     assert np.allclose([answers[t] for t in ticks], motor[0], rtol=1e-12)   # a hold
     assert np.ptp([motor[t] for t in ticks]) < 1e-9 * abs(motor[0]) + 1e-9
+
+
+def test_a_managed_controller_disabled_in_lockstep_answers_with_its_set_point(ros, tmp_path):
+    """manage_drive_mode, the rig in lockstep on the motor-torque command: disabled, the
+    controller hands the drive back to its speed loop and answers every tick with the
+    set-point it was handed (from its own set-point topic) on the rig's ~/cmd/top_drive, where
+    the rig's wait has moved with the drive's mode; enabled again, the law's torque answers.
+    Every tick is answered: no tick waits out the lockstep timeout (3 s), and the drive's
+    speed goes to the set-point. Fails if the disabled controller is silent (the rig waits,
+    as before), or answers a torque the speed-mode drive refuses."""
+    from rcl_interfaces.msg import ParameterType, ParameterValue
+    from rosutil import _set, spin_for
+    ns, rig, bag = "/ctman", "/ctman/drill_sim", tmp_path / "managed"
+    _, motor = by_stamp(ros, rig, bit=False)
+    drive: dict[int, float] = {}
+    ros.create_subscription(TwistStamped, f"{rig}/top_drive/twist",
+                            lambda m: drive.__setitem__(stamp(m), m.twist.angular.z), 10000)
+    setpoint = ros.create_publisher(TwistStamped, "/ctman_setpoint", 10)
+    with lockstep_rig(ns, "top_drive_mode:=speed", "lockstep_timeout_s:=3.0",
+                      f"record:={bag}") as node, \
+         NodeProcess("drill_sim_controller", "--ros-args", "-r", f"__ns:={ns}",
+                     "-p", f"rig:={rig}", "-p", "inputs:=exact", "-p", "manage_drive_mode:=true",
+                     "-p", "setpoint_topic:=/ctman_setpoint",
+                     "-p", f"initial_speed_setpoint_rad_s:={60 * RPM!r}"):
+        start_when_connected(ros, rig)
+        wait_for(lambda: len(motor) >= 200, ros, 60.0, "200 ticks under the law")
+        msg = TwistStamped()
+        msg.twist.angular.z = 65 * RPM
+        setpoint.publish(msg)
+        spin_for(ros, 0.2)
+        off = ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=False)
+        assert _set(ros, f"{ns}/drill_sim_controller", "enabled", off).successful
+        at_off = max(motor)
+        wait_for(lambda: max(motor) >= at_off + 1_500_000_000, ros, 60.0,
+                 "1.5 s of ticks with the controller off")
+        on = ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=True)
+        assert _set(ros, f"{ns}/drill_sim_controller", "enabled", on).successful
+        at_on = max(motor)
+        wait_for(lambda: max(motor) >= at_on + 300_000_000, ros, 60.0,
+                 "0.3 s of ticks with the controller on again")
+        _, out = node.stop()
+    assert "lockstep: waiting" not in out, out[-2000:]
+    speeds = recorded_commands(bag, f"{rig}/cmd/top_drive", TwistStamped,
+                               lambda m: m.twist.angular.z)
+    off_ticks = [t for t in sorted(motor) if at_off + 300_000_000 <= t <= at_on]
+    assert len(off_ticks) > 1000
+    assert all(speeds.get(t) == 65 * RPM for t in off_ticks)      # each tick: the set-point
+    late = [drive[t] for t in off_ticks[len(off_ticks) // 2:] if t in drive]
+    assert abs(np.mean(late) - 65 * RPM) < 0.05 * 65 * RPM     # the drive's loop follows it
+    torques = recorded_commands(bag, f"{rig}/cmd/top_drive_torque", WrenchStamped,
+                                lambda m: m.wrench.torque.z)
+    assert sum(t > at_on for t in torques) > 200                  # the law answers again
 
 
 def _policy_offline(policy, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -150,29 +218,13 @@ def test_one_policy_in_the_environment_and_against_the_nodes_gives_the_same_samp
     lockstep gives the same bit speed and motor torque at every sample (to 1e-9)."""
     from drill_sim.control.policy import proportional_speed_policy
     ns, rig, duration = "/ctpol", "/ctpol/drill_sim", 1.0
-    bit: dict[int, float] = {}
-    motor: dict[int, float] = {}
-
-    def stamp(m) -> int:
-        return m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
-
-    ros.create_subscription(TwistStamped, f"{rig}/bit/twist",
-                            lambda m: bit.__setitem__(stamp(m), m.twist.angular.z), 10000)
-    ros.create_subscription(WrenchStamped, f"{rig}/top_drive/motor_wrench",
-                            lambda m: motor.__setitem__(stamp(m), m.wrench.torque.z), 10000)
-    with NodeProcess("drill_sim_node", "--ros-args", "-r", f"__ns:={ns}",
-                     "-p", "top_drive_mode:=torque", "-p", "publish_clock:=true",
-                     "-p", "lockstep:=true", "-p", "lockstep_topics:=[cmd/top_drive_torque]",
-                     "-p", "lockstep_timeout_s:=0.5", "-p", "start_paused:=true"), \
+    bit, motor = by_stamp(ros, rig)
+    with lockstep_rig(ns), \
          NodeProcess("drill_sim_controller", "--ros-args", "-r", f"__ns:={ns}",
                      "-p", f"rig:={rig}", "-p", "inputs:=exact", "-p", "law:=policy",
                      "-p", "policy:=drill_sim.control.policy:proportional_speed_policy",
                      "-p", f"initial_speed_setpoint_rad_s:={61 * RPM!r}"):
-        wait_for(lambda: ros.count_publishers(f"{rig}/cmd/top_drive_torque") > 0
-                 and ros.count_subscribers(f"{rig}/top_drive/motor_wrench") >= 2
-                 and ros.count_publishers(f"{rig}/bit/twist") > 0, ros, 60.0,
-                 "the rig and the controller connected")
-        assert call_service(ros, SetBool, f"{rig}/pause", SetBool.Request(data=False)).success
+        start_when_connected(ros, rig)
         wait_for(lambda: bit and motor and min(max(bit), max(motor)) * 1e-9 >= duration,
                  ros, 240.0, f"{duration} s of lockstep ticks")
     off_bit, off_motor = _policy_offline(proportional_speed_policy, duration)

@@ -36,6 +36,32 @@ def test_a_tick_is_released_only_by_its_own_stamp_on_every_topic():
     assert not ls.complete and set(ls.missing) == {TOP, HOOK}
 
 
+def test_the_drives_lockstep_topic_follows_its_mode_and_an_answered_tick_stays_answered():
+    """A drive switched to speed at run time answers on ~/cmd/top_drive, to torque on
+    ~/cmd/top_drive_torque: the wait moves with it; other lockstep topics stay; a tick still
+    waiting for the drive waits on the new topic; one answered before the switch stays
+    answered. Two drive topics listed: nothing moves."""
+    torque = "~/cmd/top_drive_torque"
+    ls = Lockstep((torque, HOOK), timeout_s=1.0)
+    ls.wait_for(1_000_000, now_s=0.0)
+    ls.follow_drive_mode("speed")
+    assert ls.topics == (TOP, HOOK) and ls.missing == {TOP, HOOK}
+    assert not ls.offer(torque, 1_000_000)        # the torque topic no longer answers
+    assert ls.offer(TOP, 1_000_000) and ls.offer(HOOK, 1_000_000) and ls.complete
+    ls.wait_for(2_000_000, now_s=0.001)
+    assert ls.offer(TOP, 2_000_000)
+    ls.follow_drive_mode("torque")                # answered before the switch: stays so
+    assert ls.topics == (torque, HOOK) and ls.missing == {HOOK}
+    ls.follow_drive_mode("kinematic")
+    assert ls.topics == (TOP, HOOK)
+    both = Lockstep((TOP, torque), timeout_s=1.0)
+    both.follow_drive_mode("speed")
+    assert both.topics == (TOP, torque)
+    hook_only = Lockstep((HOOK,), timeout_s=1.0)
+    hook_only.follow_drive_mode("torque")
+    assert hook_only.topics == (HOOK,)
+
+
 def test_a_wait_is_reported_once_per_timeout_and_never_ends_by_itself():
     ls = Lockstep((TOP,), timeout_s=0.5)
     ls.wait_for(0, now_s=10.0)
