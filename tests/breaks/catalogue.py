@@ -38,6 +38,7 @@ T_SUP = "tests/control/test_control_supervisor.py"
 T_EVAL = "tests/control/test_control_evaluation.py"
 T_SESSION = "tests/session/test_rig_session.py"
 T_SCENARIO = "tests/session/test_scenario_on_the_clock.py"
+T_VEC_TORQUE = "tests/gym/test_vector_env.py::test_each_rig_equals_a_rig_env_in_torque_mode"
 T_MAP = "tests/study/test_map.py"
 
 BREAKS: tuple[Break, ...] = (
@@ -390,4 +391,18 @@ BREAKS: tuple[Break, ...] = (
         "            elif False:\n                self._answer_disabled(",
         "tests/ros/test_controller_lockstep.py::"
         "test_a_managed_controller_disabled_in_lockstep_answers_with_its_set_point"),
+    one("vector environment: the hook load of the sample after the command's",
+        "drill_sim/gym/vector_step.py", "        obs[i, 3] = hook[i, j - 1]",
+        "        obs[i, 3] = hook[i, j]",
+        T_VEC_TORQUE,
+        "tests/gym/test_vector_env.py::test_each_rig_equals_a_rig_env_in_speed_mode"),
+    one("vector environment: the torque-rate penalty of the action before clipping",
+        "drill_sim/gym/vector_step.py",
+        "            rate = (abs(held - held_before[i]) / weights[W_H] / 1e6) ** 2",
+        "            rate = (abs(value - held_before[i]) / weights[W_H] / 1e6) ** 2",
+        T_VEC_TORQUE),
+    one("vector environment: the WOB as the last step's, not the sample's mean",
+        "drill_sim/gym/vector_step.py", "        last[F_WOB, i] = (0.0 + sum_w * fn) / n",
+        "        last[F_WOB, i] = x[i, kn.X_W] * fn",
+        T_VEC_TORQUE),
 )
