@@ -11,10 +11,10 @@ against gymnasium's own ``SyncVectorEnv`` of ``RigEnv``, to 1e-9), with gymnasiu
 ``NEXT_STEP`` auto-reset: the step after an episode's last resets that rig and ignores its
 action.
 
-What the compiled path covers: the lumped string, the ideal sensors, either top-drive mode,
-scenarios without parameter changes, no recording. Anything else is refused in one line at
-construction (``gymnasium.make_vec(..., vectorization_mode="sync")`` runs it with one
-``RigEnv`` per rig instead).
+What the compiled path covers: the lumped and the distributed string, every sensor profile,
+either top-drive mode; scenarios without parameter changes, presets without formations, no
+recording. Those are refused in one line at construction
+(``gymnasium.make_vec(..., vectorization_mode="sync")`` runs them with one ``RigEnv`` per rig).
 """
 
 from __future__ import annotations
@@ -29,11 +29,19 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 
 from ..control.closed_loop import SERIES
 from ..core import kernel as kn
-from ..core.batch import NO_ROWS, RigBatch
+from ..core.batch import RigBatch
 from ..core.parameters import ParameterError
 from ..session.scenario import Scenario
 from .rig_env import RigEnv
-from .vector_step import F_BIT, F_OUTPUT, F_STUCK, F_TIME, F_WOB, NF, step_rigs
+from .vector_step import (
+    F_BIT,
+    F_OUTPUT,
+    F_STUCK,
+    F_TIME,
+    F_WOB,
+    NF,
+    step_rigs,
+)
 
 MAX_RIGS = 65_536
 
@@ -87,19 +95,17 @@ class RigVecEnv(VectorEnv):
         self._last = np.zeros((NF, n))                    # SERIES of each rig's last sample
         self._tob = np.zeros(n)                           # each rig's last TOB [N m]
         self._window_now = np.zeros(n, dtype=bool)
+        self._refill = np.zeros(n, dtype=bool)              # a rig's sensors want new noise
+        # the ideal profile reads the sample itself (tests/gym: against RigEnv, which measures)
+        self._exact = first.settings.sensor_profile == "ideal"
         self._obs = np.zeros((n, *first.observation_space.shape))
         self._reward = np.zeros(n)
         self._names = np.full(n, "", dtype=object)
 
     @staticmethod
     def _refuse_what_is_not_compiled(env: RigEnv, record) -> None:
-        s = env.settings
         why = None
-        if s.string_model != "lumped":
-            why = f"string_model {s.string_model!r} (the compiled path steps the lumped string)"
-        elif s.sensor_profile != "ideal":
-            why = f"sensor_profile {s.sensor_profile!r} (the compiled path reads exact signals)"
-        elif record is not None:
+        if record is not None:
             why = "record (episodes are recorded by RigEnv)"
         elif any(x.changes for x in env.scenarios):
             names = ", ".join(x.name for x in env.scenarios if x.changes)
@@ -133,8 +139,9 @@ class RigVecEnv(VectorEnv):
         env = self.envs[i]
         loop = env.loop
         rig = loop.rig
+        bank = loop.session.sensors
         if self._batch is None:
-            self._batch = RigBatch(self.num_envs, rig.sim._surf.size)
+            self._batch = RigBatch(self.num_envs, rig.sim, bank)
             self._scales = sc = rig.scales
             self._steps_per_tick = loop.session.steps_per_tick
             self._max_speed = float(loop.session.p["max_top_drive_speed_rad_s"])
@@ -147,7 +154,7 @@ class RigVecEnv(VectorEnv):
                 self._steps_per_tick:
             raise ParameterError("the vector environment's rigs must share their scales and "
                                  "step (one preset)")
-        self._batch.adopt(i, rig.sim)
+        self._batch.adopt(i, rig.sim, bank)
         n_i = loop.n
         if self._speed_set.shape[1] < n_i + 1:
             self._grow(n_i + 1)
@@ -182,9 +189,9 @@ class RigVecEnv(VectorEnv):
                                  "each rig's top-drive command")
         values = np.ascontiguousarray(values[:, 0])
         live = ~self._autoreset
-        bad = live & ~np.isfinite(values)
-        if bad.any():
-            i = int(np.flatnonzero(bad)[0])
+        finite = np.isfinite(values)
+        if not finite.all() and (live & ~finite).any():
+            i = int(np.flatnonzero(live & ~finite)[0])
             what = "motor torque [N m]" if self.torque else "speed [rad/s]"
             raise ParameterError(f"action of rig {i} = {values[i]!r}: expected a finite {what}")
         if not self.torque:
@@ -195,14 +202,21 @@ class RigVecEnv(VectorEnv):
                                      f"speed {min(values[i], self._high)!r} rad/s is above "
                                      f"max_top_drive_speed_rad_s {self._max_speed:g}")
         b, obs, reward = self._batch, self._obs, self._reward
-        refused = step_rigs(b.x, b.k, b.surf, b.p, b.c, b.acc, live, self.torque,
-                            self._steps_per_tick, values, self._held, self._speed_set,
-                            self._hook, self._k, self._n, self._window_k, self._speed_cmd,
-                            self._last, self._series, self._tob, self._scale_row,
-                            self._weight_row, obs, reward, self._window_now, NO_ROWS)
+        s = b.bank
+        common = (live, self.torque, self._steps_per_tick, values, self._held, self._speed_set,
+                  self._hook, self._k, self._n, self._window_k, self._speed_cmd, self._last,
+                  self._series, self._tob, self._scale_row, self._weight_row, obs, reward,
+                  self._window_now, s["_par"], s["_state"], s["_istate"], s["_ring"],
+                  s["_noise"], s["_window"], b.window_s, s["_x"], s["_out"], s["_fresh"],
+                  self._refill, self._exact, b.no_rows)
+        refused = step_rigs(b.x, b.k, b.surf, b.p, b.c, b.acc, b.distributed, *b.lines_args,
+                            *common)
         if refused >= 0:
             self.envs[refused].loop.rig.sim._refuse_step()
-        for i in np.flatnonzero(self._window_now):
+        # the rare per-rig events (flatnonzero costs ~3 us: looked for only when one came)
+        for i in np.flatnonzero(self._refill) if self._refill.any() else ():
+            self.envs[i].loop.session.sensors._refill()
+        for i in np.flatnonzero(self._window_now) if self._window_now.any() else ():
             self.envs[i].loop.rig.reset_metrics_window()
         obs, reward = obs.copy(), reward.copy()
         truncated = live & (self._k >= self._n)
@@ -212,11 +226,12 @@ class RigVecEnv(VectorEnv):
                  "rop_m_s": b.x[:, kn.X_V] * self._scales.velocity_m_s,
                  "regime": b.k[:, kn.K_REGIME].copy(), "stuck": last[F_STUCK] != 0.0,
                  "scenario": self._names.copy()}
-        infos |= {"_" + key: live.copy() for key in list(infos)}
-        for i in np.flatnonzero(truncated):
+        mask = live.copy()                  # every key's: the live rigs have them all
+        infos |= {"_" + key: mask for key in list(infos)}
+        for i in np.flatnonzero(truncated) if truncated.any() else ():
             infos = self._add_info(infos, {"result": self._finish(i)}, i)
         # NEXT_STEP: the rigs that ended last step start their next episode now
-        for i in np.flatnonzero(self._autoreset):
+        for i in np.flatnonzero(self._autoreset) if self._autoreset.any() else ():
             obs[i], info = self.envs[i].reset()
             self._adopt(i)
             reward[i] = 0.0
