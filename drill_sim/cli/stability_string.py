@@ -55,6 +55,13 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
     hz = 1.0 / (2.0 * math.pi * t_star)
     roots = [[float(r.real), float(r.imag)] for r in res.roots]
     top, boundary, law_gains = _law_boundary(args, case, drive)
+    closed = None
+    if top is not None:                  # on bottom with the law at the top: the closed loop
+        try:
+            closed = string_stability(case.groups, waves, case.w0, case.omega0, re_min=re_min,
+                                      re_max=RE_MAX, im_max=IM_MAX, top=top)
+        except ParameterError as exc:
+            raise UsageError(f"--law {args.law}, the closed loop on bottom: {exc}") from None
     try:
         damped = string_modes(waves, case.groups.psi,
                               drive.top_drive.groups(rig.scales, rig.bha_inertia_kg_m2),
@@ -67,7 +74,8 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
     out = {"steady_drilling": True, "string_model": "distributed", "w0": case.w0,
            "omega0": case.omega0, "delta_n0": steady.delta_n0, "v0": steady.v0, "t0": steady.t0,
            "tau_n0": steady.tau_n0, "stable": res.stable, "roots": roots[:args.count],
-           "roots_found": len(roots), "roots_counted": res.count_argument_principle - 1,
+           "roots_found": len(roots),
+           "roots_counted": res.count_argument_principle - res.roots_at_zero,
            "complete": res.complete, "box": list(res.box),
            "completeness": "argument principle on the box's edge; roots with |Im s| > "
                            f"{IM_MAX:g} are not searched",
@@ -75,6 +83,14 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
            "axial_frequencies_hz": [float(f * hz) for f in axial[:AXIAL_MODES]],
            "modes": modes, "modes_complete": damped.complete,
            "modes_boundary": boundary, **law_gains,
+           **({} if closed is None else {"closed_loop_on_bottom": {
+               "stable": closed.stable,
+               "roots": [[float(r.real), float(r.imag)] for r in closed.roots][:args.count],
+               "roots_found": int(closed.roots.size),
+               # the argument principle counts the roots less the law's poles in the box
+               "roots_counted": closed.count_argument_principle - closed.roots_at_zero,
+               "complete": bool(closed.roots.size
+                                >= closed.count_argument_principle - closed.roots_at_zero)}}),
            "units": "dimensionless: s in 1/t*, v0 in L*/t*, t0 in C, delta_n0 in L*; "
                     "frequencies in Hz (modes: the damped frequency Im s / 2 pi, damping ratio "
                     "-Re s / |s|)", "t_star_s": t_star}
@@ -90,10 +106,19 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
     print(f"{'stable' if res.stable else 'UNSTABLE'}: {len(roots)} roots of Delta_d(s) in the "
           f"box {x0:g} <= Re s <= {x1:g}, |Im s| <= {y1:g} /t* (up to {y1 * hz:.3g} Hz) besides "
           f"s = 0, {'all' if res.complete else 'NOT all'} of the "
-          f"{res.count_argument_principle - 1} the argument principle counts on the box's edge; "
+          f"{res.count_argument_principle - res.roots_at_zero} the argument principle counts on "
+          "the box's edge; "
           "roots above the box are not searched; rightmost:")
     for re, im in roots[:args.count]:
         print(f"  s = {re:+.6f} {im:+.6f}i  ({im * hz:+.3f} Hz)")
+    if closed is not None:
+        print(f"bit on bottom, {args.law} at the top (the closed loop; the law's own filters' "
+              f"roots may be among them): {'stable' if closed.stable else 'UNSTABLE'}, "
+              f"{closed.roots.size} roots found in the same box (the argument principle counts "
+              f"{closed.count_argument_principle - closed.roots_at_zero}: the roots less the "
+              "law's poles there); rightmost:")
+        for r in closed.roots[:args.count]:
+            print(f"  s = {r.real:+.6f} {r.imag:+.6f}i  ({r.imag * hz:+.3f} Hz)")
     print("natural frequencies off bottom (bit free, top speed and hook force held):")
     print("  torsional " + ", ".join(f"{f:.3f}" for f in out["torsional_frequencies_hz"]) +
           " Hz; axial " + ", ".join(f"{f:.3f}" for f in out["axial_frequencies_hz"]) + " Hz")
@@ -104,8 +129,9 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
                                         for m in modes if m["kind"] == kind))
     if args.law is not None:
         print(f"  these are the closed loop's with {args.law} at the top (a root of the law's own "
-              "filters may be among them): the law's stability, mode by mode; the roots of "
-              "Delta_d above are the bit's, on bottom with the top held")
+              "filters may be among them): the law's stability, mode by mode; on bottom, the "
+              "roots with the top held are the bit's own, and the closed loop's say what the "
+              "law changes of them")
     return 0
 
 

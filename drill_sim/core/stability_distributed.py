@@ -8,7 +8,10 @@ at the top) from the sections' transfer matrices (``WaveLine.transfer``),
     Delta_d(s) = (s^2 + psi K_a + n psi E)(s^2 + K_t) - k E (s^2 + psi K_a),
 
 which is Delta(s) for K_t = 1, K_a = 0. K_t and K_a have poles (the clamped string's modes), so
-the roots are sought of the entire function m11_a m12_t Delta_d(s). Root finding: Newton from a
+the roots are sought of the entire function m11_a m12_t Delta_d(s). With another top boundary
+(a control law on the drive's inertia: T_top = -(K/L) phi_top, ``top``), the pipe's bottom
+stiffness is K_t = -(L m21 - K m22)/(L m11 - K m12) and the entire function
+m11_a (L m11 - K m12) Delta_d(s); K/L infinite is the top held. Root finding: Newton from a
 grid over the box [re_min, re_max] x [-im_max, im_max]; the count is checked against the
 argument principle on the box's edge (the phase sampled until no step turns it by more than
 pi/4); the result says whether they agree. Unlike the lumped Delta, the string has infinitely
@@ -29,6 +32,9 @@ from .parameters import Groups, ParameterError
 from .stability import SteadyState, steady_state, winding_number
 from .top_drive import DriveGroups
 
+# a top boundary: s [1/t*] -> (K, L), K/L the top's dynamic stiffness in units of C
+TopBoundary = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+
 
 def simulated(line: WaveLine) -> WaveLine:
     """The line with the delays the simulation uses ((steps + frac) h + tau: the geometry's,
@@ -38,17 +44,24 @@ def simulated(line: WaveLine) -> WaveLine:
 
 
 def characteristic(s: np.ndarray | complex, groups: Groups, steady: SteadyState,
-                   waves: StringWaves) -> np.ndarray:
-    """m11_a m12_t Delta_d(s) (entire in s)."""
+                   waves: StringWaves, top: TopBoundary | None = None) -> np.ndarray:
+    """m11_a m12_t Delta_d(s) with the top held, or m11_a (L m11 - K m12) Delta_d(s) with the
+    top boundary ``top`` (s -> (K, L), ``string_modes``'); entire in s."""
     s = np.asarray(s, dtype=complex)
     n, psi = groups.n, groups.psi
     k = n * (steady.w0 - groups.lam) / (2.0 * math.pi)
     e = 1.0 - np.exp(-s * steady.tau_n0)
-    _, t12, _, t22 = waves.torsion.transfer(s)
+    t11, t12, t21, t22 = waves.torsion.transfer(s)
     a11, _, a21, _ = waves.axial.transfer(s)
     s2 = s * s
     axial = s2 * a11 - psi * a21
-    return (axial + n * psi * e * a11) * (s2 * t12 - t22) - k * e * t12 * axial
+    if top is None:                        # K infinite: divided through by -K
+        d, minus_n = t12, t22
+    else:
+        kt, lag = top(s)
+        d, minus_n = lag * t11 - kt * t12, lag * t21 - kt * t22
+        d, minus_n = -d, -minus_n          # the held case's sign, so both agree as K grows
+    return (axial + n * psi * e * a11) * (s2 * d - minus_n) - k * e * d * axial
 
 
 @dataclass(frozen=True)
@@ -60,6 +73,7 @@ class StringStability:
     box: tuple[float, float, float, float]
     count_argument_principle: int      # roots in the box, s = 0 included
     complete: bool
+    roots_at_zero: int = 1             # s = 0's multiplicity (in the count, not in ``roots``)
 
     @property
     def rightmost(self) -> complex:
@@ -71,9 +85,10 @@ class StringStability:
 
 
 def string_stability(groups: Groups, waves: StringWaves, w0: float, omega0: float, *,
-                     re_min: float = -0.5, re_max: float = 5.0,
-                     im_max: float = 20.0) -> StringStability:
-    """Every root of Delta_d(s) in [re_min, re_max] x [-im_max, im_max] (see module doc)."""
+                     re_min: float = -0.5, re_max: float = 5.0, im_max: float = 20.0,
+                     top: TopBoundary | None = None) -> StringStability:
+    """Every root of Delta_d(s) in [re_min, re_max] x [-im_max, im_max] (see module doc), the
+    top held or on the boundary ``top`` (a law's roots among them)."""
     steady = steady_state(groups, w0, omega0)
     if not re_min < 0.0 < re_max or im_max <= 0.0:
         raise ParameterError(f"box [{re_min}, {re_max}] x +-{im_max}: expected re_min < 0 < "
@@ -81,7 +96,7 @@ def string_stability(groups: Groups, waves: StringWaves, w0: float, omega0: floa
     box = (re_min, re_max, -im_max, im_max)
 
     def f(s):
-        return characteristic(s, groups, steady, waves)
+        return characteristic(s, groups, steady, waves, top)
 
     count = winding_number(box, f, "change the box", max_points=2**20)
     roots = np.empty(0, dtype=complex)
@@ -91,7 +106,11 @@ def string_stability(groups: Groups, waves: StringWaves, w0: float, omega0: floa
             break
     nonzero = roots[np.abs(roots) > 1e-7]
     order = np.lexsort((-nonzero.imag, -np.round(nonzero.real, 9)))
-    return StringStability(steady, nonzero[order], box, count, roots.size == count)
+    # s = 0 is a root once with the top held, twice where the top has no static stiffness
+    # (a law's top, or a free drive: the string may turn and rise freely as a whole)
+    at_zero = winding_number((-1e-4, 1e-4, -1e-4, 1e-4), f, "change the box")
+    return StringStability(steady, nonzero[order], box, count,
+                           nonzero.size == count - at_zero, at_zero)
 
 
 def _newton_from_grid(box, f, density: int) -> np.ndarray:

@@ -141,6 +141,20 @@ def test_stability_with_a_law_at_the_top_gives_the_closed_loop_roots():
             assert m["growth_rate_per_s"] == pytest.approx(-m["damping_ratio"] * omega,
                                                            rel=1e-6)
     assert out["modes"][0]["damping_ratio"] > 5 * held["modes"][0]["damping_ratio"]
+    # on bottom: the closed loop keeps the bit's own rightmost (regenerative) root and moves
+    # the string's first mode (0.57 Hz with the top held) to more damping
+    closed = out["closed_loop_on_bottom"]
+    assert closed["complete"] and not closed["stable"]
+    bit_held, bit_closed = complex(*out["roots"][0]), complex(*closed["roots"][0])
+    assert abs(bit_closed - bit_held) < 1e-3 * abs(bit_held)
+    hz = 1.0 / (2.0 * math.pi * out["t_star_s"])
+
+    def first_mode(roots):
+        return min((complex(*r) for r in roots if 0.3 < r[1] * hz < 0.8), default=None,
+                   key=lambda r: -r.real)
+    assert first_mode(out["roots"]).real < 0.0
+    moved = first_mode(closed["roots"])
+    assert moved is None or moved.real < 1.2 * first_mode(out["roots"]).real
     light = json.loads(run("stability", "--string-model", "distributed", "--json", "--law",
                            "z_torque", "--top-drive-inertia", "500").stdout)
     assert "inertia 500 kg m^2" in light["modes_boundary"]
