@@ -121,7 +121,7 @@ class RigVecEnv(VectorEnv):
     def reset(self, *, seed: int | list[int] | None = None, options: dict | None = None):
         """Every rig reset (``RigEnv.reset``; rig i with ``seed + i``, or ``seed[i]``)."""
         n = self.num_envs
-        seeds = (list(seed) if isinstance(seed, (list, tuple)) else
+        seeds = (list(seed) if isinstance(seed, (list, tuple, np.ndarray)) else
                  [None] * n if seed is None else [int(seed) + i for i in range(n)])
         if len(seeds) != n:
             raise ParameterError(f"{len(seeds)} seeds for {n} rigs: expected one each")
@@ -211,8 +211,11 @@ class RigVecEnv(VectorEnv):
                   self._refill, self._exact, b.no_rows)
         refused = step_rigs(b.x, b.k, b.surf, b.p, b.c, b.acc, b.distributed, *b.lines_args,
                             *common)
-        if refused >= 0:
-            self.envs[refused].loop.rig.sim._refuse_step()
+        if refused >= 0:              # the rigs before it have stepped: the batch is spent
+            try:
+                self.envs[refused].loop.rig.sim._refuse_step()
+            except ParameterError as exc:
+                raise ParameterError(f"rig {refused}: {exc}; reset the environment") from None
         # the rare per-rig events (flatnonzero costs ~3 us: looked for only when one came)
         for i in np.flatnonzero(self._refill) if self._refill.any() else ():
             self.envs[i].loop.session.sensors._refill()
