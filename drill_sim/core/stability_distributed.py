@@ -32,6 +32,7 @@ from .parameters import Groups, ParameterError
 from .stability import SteadyState, steady_state, winding_number
 from .top_drive import DriveGroups
 
+ZERO_BOX = 1e-4          # half-width of the box about s = 0 whose roots are s = 0 [1/t*]
 # a top boundary: s [1/t*] -> (K, L), K/L the top's dynamic stiffness in units of C
 TopBoundary = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
@@ -104,11 +105,13 @@ def string_stability(groups: Groups, waves: StringWaves, w0: float, omega0: floa
         roots = _newton_from_grid(box, f, density)
         if roots.size == count:
             break
-    nonzero = roots[np.abs(roots) > 1e-7]
-    order = np.lexsort((-nonzero.imag, -np.round(nonzero.real, 9)))
     # s = 0 is a root once with the top held, twice where the top has no static stiffness
-    # (a law's top, or a free drive: the string may turn and rise freely as a whole)
-    at_zero = winding_number((-1e-4, 1e-4, -1e-4, 1e-4), f, "change the box")
+    # (a law's top, or a free drive: the string may turn and rise freely as a whole); Newton
+    # splits a double root into a pair within ~1e-5 of it: what lies that close is s = 0
+    zero_box = ZERO_BOX
+    at_zero = winding_number((-zero_box, zero_box, -zero_box, zero_box), f, "change the box")
+    nonzero = roots[(np.abs(roots.real) > zero_box) | (np.abs(roots.imag) > zero_box)]
+    order = np.lexsort((-nonzero.imag, -np.round(nonzero.real, 9)))
     return StringStability(steady, nonzero[order], box, count,
                            nonzero.size == count - at_zero, at_zero)
 

@@ -31,7 +31,9 @@ from ..control.policy import OBSERVATION
 from ..control.scenarios import named
 from ..core import load_preset
 from ..core.parameters import ParameterError, check_number
-from ..core.sensors import Measured
+from ..core.sensor_profile import load_profile
+from ..core.sensors import MAX_SENSOR_SEED, Measured
+from ..session.parameter_table import PERTURBATION_RANGE
 from ..session.scenario import Scenario
 
 # the observation: one definition for the environment and a policy in the loop
@@ -81,6 +83,7 @@ class RigEnv(gym.Env):
                                      f"{', '.join(DEFAULT_WEIGHTS)}")
             weights[name] = check_number(f"reward weight {name}", value, low_inclusive=True)
         self.weights = weights
+        self._check_session(string_model, sensor_profile, sensor_seed, perturbation)
         self.settings = LoopSettings(
             law=MODES[top_drive_mode], sample_period_s=self.h,
             string_model=string_model or self.preset.string_model,
@@ -99,6 +102,20 @@ class RigEnv(gym.Env):
         self.loop: LoopStepper | None = None
         self.episodes = 0
         self.held_action = 0.0          # the command the drive holds now (bumpless take-over)
+
+    @staticmethod
+    def _check_session(string_model, sensor_profile, sensor_seed, perturbation) -> None:
+        """What the episodes' sessions would refuse, refused here at construction."""
+        if string_model not in (None, "lumped", "distributed"):
+            raise ParameterError(f"string_model = {string_model!r}: expected lumped or "
+                                 "distributed (None: the preset's)")
+        load_profile(sensor_profile)                     # a ParameterError naming what is wrong
+        if isinstance(sensor_seed, bool) or not isinstance(sensor_seed, (int, np.integer)) \
+                or not 0 <= sensor_seed <= MAX_SENSOR_SEED:
+            raise ParameterError(f"sensor_seed = {sensor_seed!r}: expected a whole number from "
+                                 f"0 to {MAX_SENSOR_SEED}")
+        low, high = PERTURBATION_RANGE
+        check_number("perturbation", perturbation, low=low, high=high, low_inclusive=True)
 
     # ---- the episode -----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):

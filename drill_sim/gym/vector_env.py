@@ -183,7 +183,11 @@ class RigVecEnv(VectorEnv):
     # ---- a step of every rig --------------------------------------------------------------------
     def step(self, actions):
         n = self.num_envs
-        values = np.asarray(actions, dtype=np.float64).reshape(n, -1)
+        values = np.asarray(actions, dtype=np.float64)
+        if values.size != n or values.ndim > 2:
+            raise ParameterError(f"actions of shape {values.shape}: expected ({n}, 1), each "
+                                 "rig's top-drive command")
+        values = values.reshape(n, -1)
         if values.shape[1] != 1:
             raise ParameterError(f"actions of shape {np.shape(actions)}: expected ({n}, 1), "
                                  "each rig's top-drive command")

@@ -51,13 +51,21 @@ class CommandOwnership:
         now = time.monotonic()
         if not inbox.refused_from or now < self._next_report:
             return
-        for (topic, gid), count in sorted(inbox.refused_from.items()):
-            log.warning(f"refused {count} command{'s' if count > 1 else ''} on {topic} from "
-                        f"{self._name(topic, gid)}: {self._names.get(topic, NOT_YET_NAMED)} "
-                        "owns it (command_owner first); stop the other program, or stop the "
-                        "owner to hand the topic over")
-        inbox.refused_from.clear()
+        self._report()
         self._next_report = now + REPORT_PERIOD_S
+
+    def _report(self, only: str | None = None) -> None:
+        """Say the refusals not yet said (on topic ``only``, or every topic), and forget them."""
+        refused = self._inbox.refused_from
+        for (topic, gid), count in sorted(refused.items()):
+            if only is not None and topic != only:
+                continue
+            self._node.get_logger().warning(
+                f"refused {count} command{'s' if count > 1 else ''} on {topic} from "
+                f"{self._name(topic, gid)}: {self._names.get(topic, NOT_YET_NAMED)} owns it "
+                "(command_owner first); stop the other program, or stop the owner to hand the "
+                "topic over")
+            del refused[(topic, gid)]
 
     def check_graph(self) -> tuple[tuple[str, str], ...]:
         """Free the topics whose owner's publisher has left (said in the log), name owners
@@ -67,6 +75,7 @@ class CommandOwnership:
             publishers = self._publishers(topic)
             named = self._names.get(topic) not in (None, NOT_YET_NAMED)
             if gid not in publishers and named:      # seen in the graph once, now gone
+                self._report(only=topic)             # what it refused while it owned it
                 inbox.release(topic)
                 log.info(f"{topic}: its owner {self._names.pop(topic, NOT_YET_NAMED)} has "
                          "left; the next publisher's command takes it (command_owner first)")

@@ -293,7 +293,19 @@ class ControllerNode(Node):
             else:
                 self.core.set_enabled(False)
                 self._request_mode("speed", None)
+            self.get_logger().info(self._enabled_words(enabled))
         return SetParametersResult(successful=True)
+
+    def _enabled_words(self, enabled: bool) -> str:
+        """What switching the law on or off does, for the log."""
+        if enabled:
+            return (f"enabled: {self.core.law.name} takes over bumplessly"
+                    + (" once the rig's drive is in torque mode" if self.manage_mode else ""))
+        if not self.manage_mode:
+            return "disabled: each sample is answered with a hold (the last command)"
+        return ("disabled: the rig's drive goes back to its speed loop"
+                + ("; each sample is answered with the speed set-point on the rig's "
+                   "~/cmd/top_drive (the rig is in lockstep)" if self._rig_lockstep else ""))
 
     def _request_mode(self, mode: str, then) -> None:
         """Ask the rig to put its drive in ``mode`` (bumpless at the rig) as soon as its

@@ -67,17 +67,19 @@ class Lockstep:
         self.other_stamps += 1
         return False
 
-    def follow_drive_mode(self, mode: str) -> None:
+    def follow_drive_mode(self, mode: str) -> str | None:
         """The drive is now in ``mode`` (speed or torque): wait on that mode's command topic
-        instead of the other one's (when exactly one of the two is a lockstep topic)."""
+        instead of the other one's (when exactly one of the two is a lockstep topic); the
+        topic now waited on, None if nothing moved."""
         to = DRIVE_COMMAND_TOPICS.get(mode)
         drive = [t for t in self.topics if t in DRIVE_COMMAND_TOPICS.values()]
         if to is None or len(drive) != 1 or drive[0] == to:
-            return
+            return None
         self.topics = tuple(to if t == drive[0] else t for t in self.topics)
         if drive[0] in self.missing:
             self.missing.discard(drive[0])
             self.missing.add(to)
+        return to
 
     @property
     def complete(self) -> bool:

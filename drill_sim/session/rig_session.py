@@ -299,7 +299,11 @@ class RigSession:
         if new.get("top_drive_mode") != self.p.get("top_drive_mode"):
             self.commands.mode_left(self.p.get("top_drive_mode"))
             if self.lockstep is not None:
-                self.lockstep.follow_drive_mode(str(new.get("top_drive_mode")))
+                mode = str(new.get("top_drive_mode"))
+                if (moved := self.lockstep.follow_drive_mode(mode)) is not None:
+                    self.log.info(f"lockstep: the drive is in {mode} mode now; each tick "
+                                  f"waits for its command on {moved} (lockstep_topics says "
+                                  "where the session started)")
         self.p = dict(new)
         if changed & set(rules.RIG_FIELDS):
             self.log.info(f"rig figures now: {self.figures()}")

@@ -136,6 +136,10 @@ def test_a_different_action_or_seed_is_told_apart():
 @pytest.mark.parametrize(("kwargs", "fragment"), [
     ({"num_envs": 0}, "num_envs = 0"),
     ({"num_envs": True}, "num_envs = True"),
+    ({"string_model": "stiff"}, "string_model = 'stiff'"),
+    ({"sensor_profile": "no_such_profile"}, "no_such_profile"),
+    ({"sensor_seed": -1}, "sensor_seed = -1"),
+    ({"perturbation": float("nan")}, "perturbation = nan"),
     ({"scenarios": "switch_on,standard", "top_drive_mode": "speed", "record": "x"}, "record"),
 ])
 def test_what_the_compiled_path_does_not_run_is_refused_in_one_line(kwargs, fragment):
@@ -150,5 +154,6 @@ def test_bad_actions_are_refused_by_rig():
     vec.reset(seed=0)
     with pytest.raises(ParameterError, match="rig 1"):
         vec.step(np.array([[0.0], [np.nan]]))
-    with pytest.raises(ParameterError, match=r"expected \(2, 1\)"):
-        vec.step(np.zeros((2, 2)))
+    for shape in ((2, 2), (4, 1), (3,)):
+        with pytest.raises(ParameterError, match=r"expected \(2, 1\)"):
+            vec.step(np.zeros(shape))
