@@ -17,6 +17,9 @@ from .publisher_take import endpoint_gid
 from .topics import NOT_YET_NAMED, publisher_names
 
 REPORT_PERIOD_S = 1.0       # refusals are summed and said at most this often
+# an owner the graph never showed is taken to have left after this long [s] (discovery of a
+# publisher lags its first message by milliseconds, not seconds)
+NEVER_SEEN_S = 5.0
 LEFT = "(a publisher that has left)"
 
 
@@ -27,6 +30,7 @@ class CommandOwnership:
     def __init__(self, node: Node, inbox: CommandInbox) -> None:
         self._node, self._inbox = node, inbox
         self._names: dict[str, str] = {}       # topic -> owner node, once named
+        self._unseen_since: dict[str, float] = {}   # topic -> when its owner was first missed
         self._next_report = 0.0
         self._resolved = {t.name: node.resolve_topic_name(t.name) for t in rig_topics.COMMANDS}
 
@@ -74,8 +78,17 @@ class CommandOwnership:
         for topic, gid in list(inbox.owners.items()):
             publishers = self._publishers(topic)
             named = self._names.get(topic) not in (None, NOT_YET_NAMED)
-            if gid not in publishers and named:      # seen in the graph once, now gone
-                self._report(only=topic)             # what it refused while it owned it
+            if gid in publishers:
+                self._unseen_since.pop(topic, None)
+                gone = False
+            elif named:                          # seen in the graph once, now gone
+                gone = True
+            else:                                # not discovered yet, or gone before it was
+                since = self._unseen_since.setdefault(topic, time.monotonic())
+                gone = time.monotonic() - since >= NEVER_SEEN_S
+            if gone:
+                self._unseen_since.pop(topic, None)
+                self._report(only=topic)         # what it refused while it owned it
                 inbox.release(topic)
                 log.info(f"{topic}: its owner {self._names.pop(topic, NOT_YET_NAMED)} has "
                          "left; the next publisher's command takes it (command_owner first)")
