@@ -119,13 +119,7 @@ class CommandInbox:
                 sequence = info.get("publication_sequence_number")
                 if sequence:
                     self._count_gap(t.name, sequence)
-                try:
-                    frame_id, sec, nanosec, six = decode(data)
-                except WireError as exc:
-                    self.undecodable += 1
-                    self.last_undecodable = f"{t.name}: {exc}"
-                    continue
-                out.append(Command(t, data, frame_id, sec, nanosec, six))
+                self._keep(out, t, data, decode)
         return out
 
     def _take_owned(self) -> list[Command]:
@@ -147,14 +141,19 @@ class CommandInbox:
                     continue
                 if taken.sequence:           # one publisher's numbering: exact
                     self._count_gap(t.name, taken.sequence, owned=True)
-                try:
-                    frame_id, sec, nanosec, six = decode(taken.data)
-                except WireError as exc:
-                    self.undecodable += 1
-                    self.last_undecodable = f"{t.name}: {exc}"
-                    continue
-                out.append(Command(t, taken.data, frame_id, sec, nanosec, six))
+                self._keep(out, t, taken.data, decode)
         return out
+
+    def _keep(self, out: list[Command], t: RigTopic, data: bytes, decode) -> None:
+        """The message ``data`` of topic ``t`` decoded onto ``out``; counted if it does not
+        decode."""
+        try:
+            frame_id, sec, nanosec, six = decode(data)
+        except WireError as exc:
+            self.undecodable += 1
+            self.last_undecodable = f"{t.name}: {exc}"
+            return
+        out.append(Command(t, data, frame_id, sec, nanosec, six))
 
     def release(self, name: str) -> None:
         """Topic ``name`` (table name) is free again: the next publisher's command owns it."""

@@ -89,15 +89,14 @@ class RigNode(Node):
         self._samples_topic = self.resolve_topic_name(rig_topics.JOINT_STATES.name)
         self._others: tuple[str, ...] = ()       # other publishers on it, last looked at
         self._shared: tuple[tuple[str, tuple[str, ...]], ...] = ()   # shared command topics
+        owner_first = p["command_owner"] == "first"
         try:
-            self.commands = CommandInbox(self, p["qos_reliability"],
-                                         owner_first=p["command_owner"] == "first")
+            self.commands = CommandInbox(self, p["qos_reliability"], owner_first=owner_first)
         except PublisherTakeUnavailable as exc:
             raise SystemExit(f"drill_sim_node: parameter command_owner = 'first' needs rcl's "
                              f"take with the publisher's GID: {exc}; use command_owner:=any "
                              "(nothing was run)") from None
-        self._ownership = (CommandOwnership(self, self.commands)
-                           if p["command_owner"] == "first" else None)
+        self._ownership = CommandOwnership(self, self.commands) if owner_first else None
         self._undecodable = self._lost_before = 0
         handlers = {"~/reset": self._on_reset, "~/pause": self._on_pause, "~/step": self._on_step}
         for t in rig_topics.SERVICES:
