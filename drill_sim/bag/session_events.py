@@ -17,7 +17,7 @@ from ..core.effort import EffortStats, Figures
 from ..wire import WireError, rig_topics
 from ..wire.cdr_decode import decode_command
 from .bag import Bag, opened
-from .series import columns, joint_chunks, joint_topic
+from .series import RigSeries, columns, joint_chunks, joint_topic
 from .stamped_series import MOTOR, matched
 
 
@@ -73,42 +73,46 @@ def _decoded(data: bytes) -> dict | None:
     return event if isinstance(event, dict) else None
 
 
-def bag_effort(bag: str | Path | Bag, events_s: list[float] | None = None,
-               window_start_s: float = -math.inf) -> Figures:
-    """``core.effort`` over a session bag, streamed: the motor torque its
-    ``~/top_drive/motor_wrench`` recorded, the limits and switches it recorded, or the
-    settling after ``events_s`` [s after the first sample] when given; the effort from
-    ``window_start_s`` [s after the first sample] on."""
+@dataclass(frozen=True)
+class BagSession:
+    """A session's bag read in one pass over its samples: the rig series, the motor torque
+    [N·m] its ``~/top_drive/motor_wrench`` recorded at those samples (None: it has none;
+    NaN where a sample has none), the ``core.effort`` figures and its events."""
+
+    series: RigSeries
+    motor_torque_nm: np.ndarray | None
+    effort: Figures
+    events: SessionEvents
+
+
+def read_session(bag: str | Path | Bag, events_s: list[float] | None = None,
+                 window_start_s: float = -math.inf,
+                 problems: list[str] | None = None) -> BagSession:
+    """The session in ``bag`` (its one joint_states topic), in memory. The effort's settling
+    counts from ``events_s`` [s after the first sample] when given, else from the controller
+    switches the rig recorded; its figures from ``window_start_s`` [s after the first sample]
+    on. Damage goes into ``problems``; BagError when there are no samples."""
     with opened(bag) as b:
         name = joint_topic(b, None)
         facts = session_events(b)
         motor = next((m for spec, m in matched(b, name, (MOTOR,)) if spec is MOTOR), None)
-        stats, origin = None, 0
-        for ns, values in joint_chunks(b, name, []):
-            if stats is None:
-                origin = int(ns[0]) if ns.size else 0
-                stats = EffortStats(facts.torque_limits_nm, events_s if events_s is not None
-                                    else [(at - origin) / 1e9 for at in facts.switches_ns],
-                                    window_start_s)
+        chunks = list(joint_chunks(b, name, [] if problems is None else problems))
+        series = RigSeries.from_chunks(name, chunks)
+        first = chunks[0][0]
+        origin = int(first[0]) if first.size else 0
+        stats = EffortStats(facts.torque_limits_nm, events_s if events_s is not None
+                            else [(at - origin) / 1e9 for at in facts.switches_ns],
+                            window_start_s)
+        torques = []
+        for ns, values in chunks:
             named = columns(values)
-            stats.add((ns - origin) / 1e9, named["bit_speed_rad_s"],
-                      None if motor is None else motor.at(ns)[:, 0],
+            torque = None if motor is None else motor.at(ns)[:, 0]
+            stats.add((ns - origin) / 1e9, named["bit_speed_rad_s"], torque,
                       named["top_drive_speed_rad_s"])
-        return (stats or EffortStats()).result()
-
-
-def motor_torque_at(bag: str | Path | Bag, series) -> np.ndarray | None:
-    """The recorded motor torque [N·m] at the samples of a ``RigSeries`` read from this bag
-    (``series.rig_series``; NaN where none), None when the bag has no
-    ``~/top_drive/motor_wrench`` for its rig."""
-    with opened(bag) as b:
-        motor = next((m for spec, m in matched(b, series.topic, (MOTOR,)) if spec is MOTOR),
-                     None)
-        if motor is None:
-            return None
-        out = np.concatenate([motor.at(ns)[:, 0]
-                              for ns, _ in joint_chunks(b, series.topic, [])] or [[]])
-        return out if out.size == series.time_s.size else None
+            if torque is not None:
+                torques.append(torque)
+        return BagSession(series, None if motor is None else np.concatenate(torques),
+                          stats.result(), facts)
 
 
 def speed_setpoints(bag: Bag, joint_topic: str) -> tuple[np.ndarray, np.ndarray]:

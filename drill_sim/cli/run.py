@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from ..bag.errors import BagError
-from ..bag.series import RigSeries, rig_series
-from ..bag.session_events import bag_effort, motor_torque_at
+from ..bag.series import RigSeries
+from ..bag.session_events import BagSession, read_session
 from ..core import RPM, load_preset
 from ..core.distributed import STRING_MODELS
 from ..core.effort import SETTLING_SSI, SETTLING_WINDOW_S, Figures, effort_figures
@@ -113,12 +113,15 @@ def run(args: argparse.Namespace) -> int:
         print(f"drill_sim run: drill_sim_node stopped early with status {node_exit} "
               "(its message is above)", file=sys.stderr)
         return 1
-    series, whence = _session(bag, received)
+    read = _read_bag(bag, scenario)
+    series, whence = (received, "as received here: the node's first samples, before this "
+                      "monitor matched it, are not counted") if read is None else \
+        (read.series, "every sample the node published, read from its bag")
     if series.time_s.size < 2:
         print("drill_sim run: no samples received from the rig", file=sys.stderr)
         return 1
     _summary(series, whence, scenario.name, f"'{preset.name}' ({string_model} string)")
-    _effort(bag, series, scenario)
+    _effort(read, series, scenario)
     marks = {}
     if switch is not None:
         compared = _before_after(series, switch.law, switch.on_at_s)
@@ -127,7 +130,8 @@ def run(args: argparse.Namespace) -> int:
     drive = preset.top_drive
     plot_rig_series(args.plot, series, title=f"drill_sim run: {scenario.name} on {preset.name}, "
                                              f"{string_model} string",
-                    marks=marks, motor_torque_nm=_motor_torque(bag, series),
+                    marks=marks,
+                    motor_torque_nm=None if read is None else read.motor_torque_nm,
                     speed_set_rad_s=scenario.speed_set_rad_s(series.time_s - series.time_s[0]),
                     torque_limits_nm=(drive.motor_torque_min_nm, drive.motor_torque_max_nm))
     print(f"plot written to {args.plot}")
@@ -162,29 +166,28 @@ def controller_command(preset, law: str, string_model: str = "lumped") -> list[s
     return cmd
 
 
-def _motor_torque(bag: Path | None, series: RigSeries) -> np.ndarray | None:
-    """The motor torque [N m] at the series' samples, from the bag (None: no bag, or none
-    in it)."""
+def _read_bag(bag: Path | None, scenario) -> BagSession | None:
+    """The session from its bag (every sample the node published, the motor torque, the
+    effort with the settling after the scenario's switch or set-point steps), read once;
+    None without a bag or when it cannot be read (said)."""
     if bag is None or not bag.is_dir():
         return None
     try:
-        return motor_torque_at(bag, series)
-    except BagError:
+        return read_session(bag, scenario.settling_events_s)
+    except BagError as exc:
+        print(f"drill_sim run: reading {bag}: {exc}; summing up what was received",
+              file=sys.stderr)
         return None
 
 
-def _effort(bag: Path | None, series: RigSeries, scenario) -> Figures:
+def _effort(read: BagSession | None, series: RigSeries, scenario) -> Figures:
     """Print the drive's effort over the run and the settling after the scenario's switch or
     set-point steps (``core.effort``), from the bag when there is one (it has the motor
     torque), else from the samples received (no motor torque: those figures are missing)."""
     events = scenario.settling_events_s
-    figures = None
-    if bag is not None and bag.is_dir():
-        try:
-            figures = bag_effort(bag, events)
-        except BagError:
-            figures = None
-    if figures is None:
+    if read is not None:
+        figures = read.effort
+    else:
         figures = effort_figures(series.time_s - series.time_s[0], series.bit_speed_rad_s,
                                  events_s=events)
 
@@ -258,19 +261,6 @@ def regime(series: RigSeries, stick_flag: bool = False) -> str:
         stuck=bool(np.any(series.stuck)) or stick_flag,
         off_bottom_fraction=float(np.mean(off)), off_bottom_now=bool(off[-1]),
         top_drive_speed_rad_s=float(series.top_drive_speed_rad_s[-1]))
-
-
-def _session(bag: Path | None, received: RigSeries) -> tuple[RigSeries, str]:
-    """The session's samples: from its bag (every sample the node published), else as this
-    monitor received them (it misses those before it matched the node)."""
-    if bag is not None and bag.is_dir():
-        try:
-            return rig_series(bag), "every sample the node published, read from its bag"
-        except BagError as exc:
-            print(f"drill_sim run: reading {bag}: {exc}; summing up what was received",
-                  file=sys.stderr)
-    return received, ("as received here: the node's first samples, before this monitor "
-                      "matched it, are not counted")
 
 
 def _summary(series: RigSeries, whence: str, scenario: str, preset: str) -> None:

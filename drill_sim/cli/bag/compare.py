@@ -16,14 +16,8 @@ import numpy as np
 
 from ...bag.bag import Bag
 from ...bag.errors import BagError
-from ...bag.series import RigSeries, joint_topic, rig_series
-from ...bag.session_events import (
-    SessionEvents,
-    bag_effort,
-    motor_torque_at,
-    session_events,
-    speed_setpoints,
-)
+from ...bag.series import RigSeries, joint_topic
+from ...bag.session_events import SessionEvents, read_session, speed_setpoints
 from ...core import RPM
 from ...core.effort import EFFORT_KEYS
 from ..checks import in_range, number, plot_file
@@ -80,21 +74,21 @@ def load(path: Path, start_s: float = 0.0) -> Session:
     with Bag.open(path) as bag:
         name = joint_topic(bag, None)
         problems: list[str] = []
-        series = rig_series(bag, name, problems)
+        read = read_session(bag, window_start_s=start_s, problems=problems)
+        series = read.series
         if series.time_s.size < 2:
             raise BagError(f"{path}: fewer than two samples on {name}")
         shown = series.window(start_s, None) if start_s > 0.0 else series
         if shown.time_s.size < 2:
             raise BagError(f"{path}: fewer than two samples from --start {start_s:g} s on")
         figures: dict[str, float | None] = dict(shown.metrics())
-        figures.update(bag_effort(bag, window_start_s=start_s))
-        events = session_events(bag)
-        motor = motor_torque_at(bag, series)
+        figures.update(read.effort)
         stamps, speeds = speed_setpoints(bag, name)
     for problem in dict.fromkeys(problems):      # damage: what was readable is compared
         print(f"drill_sim bag compare: {path}: {problem}", file=sys.stderr)
     origin = round(series.time_s[0] * 1e9)
-    return Session(path, series, figures, events, motor, (stamps - origin) / 1e9, speeds)
+    return Session(path, series, figures, read.events, read.motor_torque_nm,
+                   (stamps - origin) / 1e9, speeds)
 
 
 def run(args: argparse.Namespace) -> int:
