@@ -60,7 +60,7 @@ class RigBatch:
             f2, f3 = np.zeros((1, 1)), np.zeros((1, 1, 1))
             one = (f1, i1, f1, f1, f1, i1, f2, f2, f3)
             self.lines_args = (*one, *one, f3, np.zeros((1, 1, 1), dtype=np.int64), f1, f1, f1,
-                               1.0, np.zeros((1, 1), dtype=np.int64))
+                               1.0, f3, np.zeros((1, 1), dtype=np.int64))
 
     def adopt(self, i: int, sim: Simulator, bank: SensorBank) -> None:
         """Row i becomes ``sim``'s and ``bank``'s state: copied in, and they read and write it

@@ -62,6 +62,7 @@ A_DAMPED_ROT, A_DAMPED_AX, A_LOSS_ROT, A_LOSS_AX, A_WALL_ROT, A_WALL_AX = range(
                                                                               kn.NA + 6)
 NAD = kn.NA + 6                          # A_WALL_*: the wall's friction, dissipated likewise
 WALL_SWEEPS = 200                        # Gauss-Seidel sweeps at most (converged: 1e-11)
+NSCRATCH = 17                            # rows of ``advance``'s scratch (``_junctions_wall``)
 # extra output columns: pipe torque and force on the BHA, top axial speed and force
 O_T_BOTTOM, O_F_BOTTOM, O_V_TOP, O_F_TOP = range(kn.NO, kn.NO + 4)
 NOD = kn.NO + 4
@@ -202,50 +203,114 @@ def _free(j, m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in, ws, wa, coup
     return dt, da, rt, ra
 
 
+@njit(cache=True, inline="always")
+def _free_speeds(n_seg, z, c, rel, a_in, b_in, upper, speed):
+    """The stations' speeds with no wall, ``speed[1..m-1]``: each junction's balance of the
+    arriving invariants, its dashpot and the relative dashpots (``_junctions``' tridiagonal
+    system A w = a_in[j-1] - b_in[j]), by elimination (``upper``: scratch)."""
+    m = n_seg.size
+    upper[0] = 0.0
+    speed[0] = 0.0
+    for j in range(1, m):
+        denom = z[j - 1] + z[j] + c[j - 1] + rel[j - 1] + rel[j] - rel[j - 1] * upper[j - 1]
+        upper[j] = rel[j] / denom
+        speed[j] = (a_in[j - 1] - b_in[j] + rel[j - 1] * speed[j - 1]) / denom
+    for j in range(m - 2, 0, -1):
+        speed[j] += upper[j] * speed[j + 1]
+
+
 @njit(cache=True)
 def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_bottom,
                     abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top, v_bottom,
-                    w_static, w_dynamic, w_kappa, sigma, stuck, ws, wa):
+                    w_static, w_dynamic, w_kappa, sigma, w_cols, stuck, ws, wa, upper, force,
+                    now, solved):
     """``_junctions`` for both lines at once where the wall rubs: at each station the axial
     and the tangential sliding are one Coulomb contact (the friction against the resultant
     sliding velocity, at most mu n L_part; exact and set-valued: a station at rest stays there
     while the wall can hold the free force, static, one sliding stops when the sliding
-    friction can), in the scaled units of ``WallFriction``. With the relative dashpots the
-    stations couple: Gauss-Seidel sweeps until no speed moves (1e-11). ``stuck``: each
-    station's state, updated; ``ws``, ``wa``: the stations' speeds, kept from step to step
-    (the next step's first guess). Returns the dashpots' powers and the
-    wall's, (torsional, axial, wall torsional, wall axial)."""
+    friction can), in the scaled units of ``WallFriction``.
+
+    The stations are linear but for the wall: their speeds are the free ones less the wall's
+    forces through the junctions' inverse, w = A^-1 (b - f), and only the K rubbing stations'
+    columns of A^-1 are needed (``w_cols``, fixed: ``wall_columns``). The K contacts, coupled
+    through the relative dashpots, are solved by Gauss-Seidel sweeps over the contacts alone,
+    each exactly for the others' forces, until a sweep's changes of force move no contact
+    solved before them in the sweep by more than 1e-11 of the speeds (every contact then
+    solved for the others' final forces). A contact at rest that
+    breaks loose in a sweep slides for the rest of the step (held again only where the sliding
+    friction can hold it): the law within the step is then monotone and the sweeps converge
+    to its one solution (with the static threshold kept, a contact next to another can flip
+    between rest and sliding from sweep to sweep, with no solution to settle on).
+
+    ``stuck``: each station's state, updated; ``force`` (2, K): the contacts' torques and
+    axial forces, kept from step to step (the next step's first guess); ``ws``, ``wa``: the
+    stations' speeds; ``upper``, ``now`` (2, K: the contacts' speeds as the sweeps go),
+    ``solved`` (2, K: as each contact's own solution last left them, rest exactly 0): scratch.
+    Returns the dashpots' powers and the wall's, (torsional, axial, wall torsional, wall axial)."""
     m = tn.size
     tbuf[toff[0] + tslot[0]] = tb_in[0] + 2.0 * tz[0] * om_top
     abuf[aoff[0] + aslot[0]] = ab_in[0] + 2.0 * az[0] * v_top
-    coupled = False                          # the sweeps start from the last step's speeds
+    _free_speeds(tn, tz, tc, tr, ta_in, tb_in, upper, ws)
+    _free_speeds(an, az, ac, ar, aa_in, ab_in, upper, wa)
+    n_rub, at = w_cols.shape[1], m - 1          # a column: the stations, then the contacts
+    coupled = False
     for j in range(m):
         if tr[j] > 0.0 or ar[j] > 0.0:
             coupled = True
+    k = 0                                        # the contacts' speeds under the last forces
+    for j in range(1, m):
+        if w_static[j - 1] > 0.0:
+            om, v = ws[j], wa[j]
+            for q in range(n_rub):
+                om -= w_cols[0, q, at + k] * force[0, q]
+                v -= w_cols[1, q, at + k] * force[1, q]
+            now[0, k], now[1, k] = om, v
+            k += 1
     for _ in range(WALL_SWEEPS if coupled else 1):
         moved = 0.0
         scale = 1e-300
+        k = 0
         for j in range(1, m):
-            dt, da, rt, ra = _free(j, m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in,
-                                   ws, wa, coupled)
-            cap_s, cap_d = w_static[j - 1], w_dynamic[j - 1]
-            if cap_s <= 0.0:
-                om, v = rt / dt, ra / da
+            if w_static[j - 1] <= 0.0:
+                continue
+            gt, ga = w_cols[0, k, at + k], w_cols[1, k, at + k]    # the contact's own compliances
+            rt = now[0, k] / gt + force[0, k]                  # its free torque and axial force
+            ra = now[1, k] / ga + force[1, k]
+            kap, cap_s, cap_d = w_kappa[j - 1], w_static[j - 1], w_dynamic[j - 1]
+            r2 = rt * sigma / kap                    # torque -> tangential force [F*]
+            d2 = sigma / (gt * kap * kap)
+            rn = math.sqrt(ra * ra + r2 * r2)
+            if rn <= (cap_s if stuck[j - 1] else cap_d):
+                om, v = 0.0, 0.0
             else:
-                kap = w_kappa[j - 1]
-                r2 = rt * sigma / kap                 # torque -> tangential force [F*]
-                d2 = dt * sigma / (kap * kap)
-                rn = math.sqrt(ra * ra + r2 * r2)
-                if rn <= (cap_s if stuck[j - 1] else cap_d):
-                    om, v = 0.0, 0.0
-                else:
-                    v, u2 = _slide(ra, r2, da, d2, cap_d)
-                    om = u2 / kap
-            moved = max(moved, abs(om - ws[j]), abs(v - wa[j]))
-            scale = max(scale, abs(om), abs(v))
-            ws[j], wa[j] = om, v
+                stuck[j - 1] = 0                     # broken loose: it slides this step
+                v, u2 = _slide(ra, r2, 1.0 / ga, d2, cap_d)
+                om = u2 / kap
+            dft, dfa = (rt - om / gt) - force[0, k], (ra - v / ga) - force[1, k]
+            scale = max(scale, max(abs(om), abs(v)))
+            force[0, k] += dft
+            force[1, k] += dfa
+            if coupled:                              # the others' speeds under the change
+                for q in range(n_rub):
+                    ct, ca = w_cols[0, k, at + q] * dft, w_cols[1, k, at + q] * dfa
+                    now[0, q] -= ct
+                    now[1, q] -= ca
+                    if q < k:                        # solved this sweep: now off by that
+                        moved = max(moved, max(abs(ct), abs(ca)))
+            now[0, k], now[1, k] = om, v
+            solved[0, k], solved[1, k] = om, v
+            k += 1
         if moved <= 1e-11 * scale:
             break
+    for j in range(1, m):                        # every station under the contacts' forces
+        for q in range(n_rub):
+            ws[j] -= w_cols[0, q, j - 1] * force[0, q]
+            wa[j] -= w_cols[1, q, j - 1] * force[1, q]
+    k = 0
+    for j in range(1, m):                        # the contacts exactly as solved (rest: 0)
+        if w_static[j - 1] > 0.0:
+            ws[j], wa[j] = solved[0, k], solved[1, k]
+            k += 1
     power_t = power_a = wall_t = wall_a = 0.0
     for j in range(1, m):
         om, v = ws[j], wa[j]
@@ -272,7 +337,7 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
 @njit(cache=True)
 def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, az, an, af, ac,
             ar, aoff, abuf, alp, astate, scratch, slots, w_static, w_dynamic, w_kappa, sigma,
-            stuck, n_steps, out, out_every, out_row):
+            w_cols, stuck, n_steps, out, out_every, out_row):
     """Advance ``n_steps`` steps; rows every ``out_every`` steps (the lumped kernel's columns,
     then O_T_BOTTOM.. if ``out`` has them); return the next free row. A step that would turn
     the bit more than a sector is refused (K_REFUSED = 1), as in the lumped kernel."""
@@ -398,7 +463,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
             pt, pa, fw_t, fw_a = _junctions_wall(
                 tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_int / h,
                 abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top, v_int / h,
-                w_static, w_dynamic, w_kappa, sigma, stuck, scratch[4], scratch[5])
+                w_static, w_dynamic, w_kappa, sigma, w_cols, stuck, scratch[4], scratch[5],
+                scratch[10], scratch[11:13], scratch[13:15], scratch[15:17])
             damp_r += h * pt
             damp_a += h * pa
             wall_r += h * fw_t

@@ -73,6 +73,25 @@ class _Line:
         return h * total + held
 
 
+def wall_columns(lines: tuple[_Line, _Line], static: np.ndarray) -> np.ndarray:
+    """The junctions' inverse where the wall rubs (``distributed_kernel._junctions_wall``):
+    for each line (torsional, axial) and rubbing station k, the speeds a unit force at k gives
+    every station (A^-1 e_k, with A the junctions' tridiagonal system: the impedances, the
+    dashpot, the relative dashpots on either side) then every rubbing station; shape
+    (2, K, M + K), M the stations. Fixed: A does not change with the state."""
+    rub = np.flatnonzero(static > 0.0)
+    m = lines[0].z.size - 1
+    out = np.zeros((2, rub.size, m + rub.size))
+    for i, line in enumerate(lines):
+        z, c, rel = line.z, line.c, line.rel
+        a = np.diag(z[:-1] + z[1:] + c[:-1] + rel[:-1] + rel[1:])
+        a -= np.diag(rel[1:-1], 1) + np.diag(rel[1:-1], -1)
+        cols = np.linalg.solve(a, np.eye(m)[:, rub]).T
+        out[i, :, :m] = cols
+        out[i, :, m:] = cols[:, rub]
+    return out
+
+
 class StringSimulator(Simulator):
     """The RGD bit on a distributed string. ``waves`` must be built at this step (waves.h);
     ``drive``: the top drive (default kinematic), whose inertia is the string's top boundary
@@ -84,12 +103,14 @@ class StringSimulator(Simulator):
         self.waves = waves
         self._t, self._a = _Line(waves.torsion), _Line(waves.axial)
         m = max(self._t.n.size, self._a.n.size)
-        self._scratch = np.zeros((10, m))
+        self._scratch = np.zeros((dk.NSCRATCH, m))
         self._slots = np.zeros((2, m), dtype=np.int64)
         wall = waves.wall                      # the wall's friction at the stations, or none
-        self._wall = (np.zeros(0), np.zeros(0), np.zeros(0), 1.0) if wall is None else (
+        self._wall = (np.zeros(0), np.zeros(0), np.zeros(0), 1.0, np.zeros((2, 0, 0))) \
+            if wall is None else (
             np.ascontiguousarray(wall.static), np.ascontiguousarray(wall.dynamic),
-            np.ascontiguousarray(wall.kappa), float(wall.sigma))
+            np.ascontiguousarray(wall.kappa), float(wall.sigma),
+            wall_columns((self._t, self._a), wall.static))
         self._stuck = (self._wall[0] > 0.0).astype(np.int64)     # at rest: held
         super().__init__(groups, waves.h, stick_window=stick_window,
                          hoist_speed_limit=hoist_speed_limit, nodes=nodes, drive=drive)
@@ -136,6 +157,7 @@ class StringSimulator(Simulator):
         x = self._x
         wall_t, wall_a = self._wall_forces(st.v0, omega0)
         self._stuck[:] = 0                     # sliding everywhere
+        self._scratch[:] = 0.0
         x[kn.X_TS] = self._t.fill_steady(st.t0, omega0, wall_t)
         d = self.drive
         if not d.holds(x[kn.X_TS]):
@@ -198,6 +220,7 @@ class StringSimulator(Simulator):
             line.buf[:] = 0.0
             line.state[:] = 0.0
         self._stuck[:] = self._wall[0] > 0.0    # at rest against the wall
+        self._scratch[:] = 0.0
         self._x[kn.NX:] = 0.0
 
     def load_state(self, **_: object) -> None:

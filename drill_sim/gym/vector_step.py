@@ -32,13 +32,13 @@ M_SURFACE, M_TD_SPEED, M_MOTOR, M_HOOK, M_WOB, M_TOB, M_BIT = range(7)
 @njit(cache=True)
 def step_rigs(x, k, surf, p, c, acc, distributed, tz, tn, tf, tc, trel, toff, tbuf, tlp, tstate,
               az, an, af, ac, arel, aoff, abuf, alp, astate, scratch, slots, w_static,
-              w_dynamic, w_kappa, sigma, stuck, live, torque_mode, steps_per_tick, values,
+              w_dynamic, w_kappa, sigma, w_cols, stuck, live, torque_mode, steps_per_tick, values,
               held_before, speed_set, hook, sample_k, last_k, window_k, speed_cmd, last, series,
               tob, scales, weights, obs, reward, window_now, s_par, s_state, s_istate, s_ring,
               s_noise, s_win, window_s, s_x, s_out, s_fresh, refill, exact, no_rows):
     """One control period of every live rig (module docstring). ``x`` .. ``acc``: the stacked
     kernel state; ``distributed``: the distributed string, whose lines' fixed arrays
-    (``tz`` .. ``sigma``, shared) and buffers, low-pass states, scratch, slots and stuck
+    (``tz`` .. ``w_cols``, shared) and buffers, low-pass states, scratch, slots and stuck
     stations (each rig's) follow (the lumped string: any arrays of those types).
     ``values``: the actions as given, clipped here; ``held_before``: the commands the drives
     held (updated); ``sample_k`` (updated), ``last_k``: each rig's sample and its episode's
@@ -72,7 +72,7 @@ def step_rigs(x, k, surf, p, c, acc, distributed, tz, tn, tf, tc, trel, toff, tb
             dk.advance(x[i], k[i], surf[i], p[i], c[i], acc[i], tz, tn, tf, tc, trel, toff,
                        tbuf[i], tlp, tstate[i], az, an, af, ac, arel, aoff, abuf[i], alp,
                        astate[i], scratch[i], slots[i], w_static, w_dynamic, w_kappa, sigma,
-                       stuck[i], steps_per_tick, no_rows, 1, 0)
+                       w_cols, stuck[i], steps_per_tick, no_rows, 1, 0)
         elif torque_mode:
             kn.advance_drive(x[i], k[i], surf[i], p[i], c[i], acc[i], steps_per_tick, no_rows,
                              1, 0)

@@ -118,9 +118,20 @@ BREAKS: tuple[Break, ...] = (
         f"{T_WELL}::test_break_off_torque_of_a_slant_well_is_the_closed_form"),
     one("a station at rest held to the sliding friction, not the static", CORE
         + "distributed_kernel.py",
-        "                if rn <= (cap_s if stuck[j - 1] else cap_d):\n",
-        "                if rn <= cap_d:\n",
+        "            if rn <= (cap_s if stuck[j - 1] else cap_d):\n",
+        "            if rn <= cap_d:\n",
         f"{T_WELL}::test_static_above_sliding_friction_breaks_off_from_the_top"),
+    one("the wall's contacts coupled without the relative dashpots", CORE
+        + "distributed_simulator.py",
+        "        a -= np.diag(rel[1:-1], 1) + np.diag(rel[1:-1], -1)\n",
+        "        a -= 0.0 * np.diag(rel[1:-1], 1)\n",
+        f"{T_WELL}::test_every_rubbing_station_obeys_coulombs_law_at_every_step"),
+    one("a contact that breaks loose keeps the static threshold for the step", CORE
+        + "distributed_kernel.py",
+        "                stuck[j - 1] = 0                     "
+        "# broken loose: it slides this step\n",
+        "",
+        f"{T_WELL}::test_every_rubbing_station_obeys_coulombs_law_at_every_step"),
     one("the wall's dissipation not booked", CORE + "distributed_kernel.py",
         "            wall_t += (rt - dt * om) * om           # the wall's torque times the speed\n",
         "            wall_t += 0.0 * (rt - dt * om) * om\n",

@@ -204,3 +204,58 @@ def test_a_preset_well_and_a_bags_record_of_it():
     assert preset.rig.submerged_weight_n == pytest.approx(g.lumped()["submerged_weight_n"])
     assert geometry_waves(preset.rig, g, H).wall is not None
     assert geometry_from_record(geometry_record(g)) == g
+
+
+def test_every_rubbing_station_obeys_coulombs_law_at_every_step():
+    """field_a's start-up (the pipe's stations coupled through the material's relative
+    dashpots, sticking and breaking loose): at every step, each station's wall force, read
+    from the departures' balance at the junction (the arriving invariants, its impedances and
+    dashpots, its neighbours' speeds: not the solver's own figure), is the sliding friction
+    against the resultant sliding velocity (1e-9), or at rest within what the wall holds
+    (static if it was at rest the step before, else sliding). Fails if the contacts are solved
+    for the wrong coupling or stop at the wrong threshold."""
+    from drill_sim.core.rig import Rig
+    preset = load_preset("field_a")
+    rig = Rig(preset.rig, None, top_drive=preset.top_drive, string_model="distributed",
+              geometry=preset.string)
+    sim = rig.sim
+    t_line, a_line = sim._t, sim._a
+    static, dynamic, kappa, sigma = sim._wall[:4]
+    assert np.any(t_line.rel > 0.0)                  # the stations are coupled
+    m = t_line.z.size
+    rig.start_at_rest(0.05)
+    seen_rest = seen_slide = 0
+    for k in range(140):                             # 7 s of the 60 rpm start-up
+        t = 0.05 * (k + 1)
+        rig.command(min(t / 10.0, 1.0) * 60.0 * math.pi / 30.0, preset.rig.submerged_weight_n)
+        while rig.time_s < t - 1e-12:
+            held_before = sim.wall_held.copy()
+            sim.advance(1)
+            # scratch rows: arriving invariants a, b (torsional, axial), the stations' speeds
+            sc = sim._scratch
+            for j in range(1, m):
+                if static[j - 1] <= 0.0:
+                    continue
+                forces = []
+                for line, a_in, b_in, w in ((t_line, sc[0], sc[1], sc[4]),
+                                            (a_line, sc[2], sc[3], sc[5])):
+                    z, c, rel = line.z, line.c, line.rel
+                    r = a_in[j - 1] - b_in[j] + rel[j - 1] * w[j - 1]
+                    r += rel[j] * w[j + 1] if j < m - 1 else 0.0
+                    d = z[j - 1] + z[j] + c[j - 1] + rel[j - 1] + rel[j]
+                    forces.append(r - d * w[j])
+                tangential = forces[0] * sigma / kappa[j - 1]        # [F*]
+                force = math.hypot(forces[1], tangential)
+                u_t, u_a = kappa[j - 1] * sc[4][j], sc[5][j]
+                speed = math.hypot(u_t, u_a)
+                if speed == 0.0:
+                    seen_rest += 1
+                    cap = static[j - 1] if held_before[j - 1] else dynamic[j - 1]
+                    assert force <= cap * (1.0 + 1e-9)
+                else:
+                    seen_slide += 1
+                    assert tangential == pytest.approx(dynamic[j - 1] * u_t / speed,
+                                                       abs=1e-9 * dynamic[j - 1])
+                    assert forces[1] == pytest.approx(dynamic[j - 1] * u_a / speed,
+                                                      abs=1e-9 * dynamic[j - 1])
+    assert seen_rest > 1000 and seen_slide > 1000
