@@ -8,6 +8,9 @@ markers, applied here automatically:
 - ``ros``: the test needs rclpy (its module imports it, or it asks for the ``ros`` fixture).
 - ``slow``: a long validation run, marked by hand with the reason it must be long
   (``@pytest.mark.slow("why")``).
+- ``offline``, by hand: the programs the test starts run offline (no node, no ROS: the
+  command line's simulate, stability, map, bag): unlike the other process tests, which one
+  worker runs one at a time, these may run in the other worker beside them.
 
 The inner loop is ``pytest -m "not process and not slow"``."""
 
@@ -83,6 +86,7 @@ def pytest_configure(config) -> None:
     config.addinivalue_line("markers", "process: starts a program (an installed entry point)")
     config.addinivalue_line("markers", "ros: needs rclpy")
     config.addinivalue_line("markers", "slow(reason): a long validation run, and why it is long")
+    config.addinivalue_line("markers", "offline: the programs the test starts start no node")
     _programs_can_be_grouped(config)
 
 
@@ -149,8 +153,10 @@ def pytest_collection_modifyitems(config, items) -> None:
         if name in starting or fixtures & (starting | conftest_starting):
             item.add_marker(pytest.mark.process)
             # one worker runs the programs, one at a time (they need the machine's cores and
-            # their own ROS domain, as in a serial run); the other worker runs the rest
-            item.add_marker(pytest.mark.xdist_group("programs"))
+            # their own ROS domain, as in a serial run); the other worker runs the rest, and
+            # the offline programs (no node: nothing of theirs runs in real time)
+            if item.get_closest_marker("offline") is None:
+                item.add_marker(pytest.mark.xdist_group("programs"))
         if uses_ros or "ros" in fixtures:
             item.add_marker(pytest.mark.ros)
         for mark in item.iter_markers("slow"):

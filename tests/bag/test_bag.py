@@ -187,6 +187,7 @@ def test_truncated_bag_is_read_up_to_the_cut_and_repaired(tmp_path, fraction):
         assert r.message_count == found.message_count
 
 
+@pytest.mark.offline
 def test_foreign_and_corrupt_input_get_clear_messages(tmp_path):
     junk = tmp_path / "junk.mcap"
     junk.write_bytes(b"this is not an mcap file at all" * 10)
@@ -268,6 +269,7 @@ def test_corrupted_rig_bag_is_read_up_to_the_damage_by_the_fast_paths(tmp_path, 
         assert [recorded[t] for t in ns.tolist()] == values[:, VALUE_COLUMN["wob_n"]].tolist()
 
 
+@pytest.mark.offline
 def test_rig_series_refuses_foreign_or_missing_joint_states(tmp_path):
     from drill_sim.bag.series import rig_series
     bag = tmp_path / "foreign"

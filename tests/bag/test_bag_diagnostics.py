@@ -6,11 +6,14 @@ from __future__ import annotations
 import json
 import subprocess
 
+import pytest
 from conftest import installed
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.serialization import serialize_message
 
 from drill_sim.bag.writer import BagWriter
+
+pytestmark = pytest.mark.offline        # its programs start no node
 
 T0_NS = 1_700_000_000_000_000_000
 TYPE = "diagnostic_msgs/msg/DiagnosticArray"

@@ -19,6 +19,7 @@ def run(*args: str, check: bool = True) -> subprocess.CompletedProcess:
     return proc
 
 
+@pytest.mark.offline
 def test_simulate_si_writes_csv_plot_and_json(tmp_path):
     out, png = tmp_path / "run.csv", tmp_path / "run.png"
     proc = run("simulate", "--preset", "base", "--rpm", "60", "--wob-kn", "100", "--duration",
@@ -38,6 +39,7 @@ def test_simulate_si_writes_csv_plot_and_json(tmp_path):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.offline
 def test_simulate_groups_mode_is_dimensionless(tmp_path):
     out = tmp_path / "g.csv"
     proc = run("simulate", "--groups", "n=4,psi=13.73,lambda=6.84,beta=0.36", "--w0", "9.6",
@@ -49,11 +51,13 @@ def test_simulate_groups_mode_is_dimensionless(tmp_path):
     assert {"tau", "omega", "v", "w", "t", "ts", "delta_n", "stuck", "off_bottom"} <= set(header)
 
 
+@pytest.mark.offline
 def test_text_summary_has_units():
     proc = run("simulate", "--duration", "5")
     assert "rpm" in proc.stdout and "kN" in proc.stdout and "stick fraction" in proc.stdout
 
 
+@pytest.mark.offline
 def test_stability_json():
     proc = run("stability", "--preset", "base", "--json")
     out = json.loads(proc.stdout)
@@ -63,12 +67,14 @@ def test_stability_json():
     assert out["si"]["wob_n"] == pytest.approx(1e5)
 
 
+@pytest.mark.offline
 def test_stability_without_steady_drilling_says_so():
     proc = run("stability", "--wob-kn", "20", "--json")
     out = json.loads(proc.stdout)
     assert out["steady_drilling"] is False and "no steady drilling" in out["reason"]
 
 
+@pytest.mark.offline
 @pytest.mark.parametrize("args, fragment", [
     (("simulate", "--rpm", "nan"), "--rpm"),
     (("simulate", "--rpm", "-10"), "--rpm"),
@@ -184,6 +190,7 @@ def test_main_job_passes_on_a_bad_node_parameter_in_one_line(param, fragment):
     assert "Traceback" not in proc.stderr + proc.stdout
 
 
+@pytest.mark.offline
 def test_stability_shows_the_rig_key_figures():
     text = run("stability", "--preset", "base").stdout
     assert "rig: W_s 338 kN, t* 0.210 s, torsional 0.756 Hz (period 1.32 s), axial 5.61 Hz" \

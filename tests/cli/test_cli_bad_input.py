@@ -135,8 +135,15 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize("program, args, fragments", CASES,
-                         ids=[f"{p} {' '.join(a)}" for p, a, _ in CASES])
+def _case(program: str, args: list[str], fragments: list[str]):
+    """A case as a parameter: named by its command line; marked offline where it starts no
+    node (the command line's simulate and stability)."""
+    offline = program == "drill_sim" and args[0] in ("simulate", "stability")
+    return pytest.param(program, args, fragments, id=f"{program} {' '.join(args)}",
+                        marks=[pytest.mark.offline] if offline else [])
+
+
+@pytest.mark.parametrize("program, args, fragments", [_case(*case) for case in CASES])
 def test_bad_input_ends_in_one_clear_line(files, program, args, fragments):
     from rosutil import isolate
     isolate()
@@ -151,6 +158,7 @@ def test_bad_input_ends_in_one_clear_line(files, program, args, fragments):
     assert not (files["root"] / "no").exists()          # no folder made on the way
 
 
+@pytest.mark.offline
 def test_negative_numbers_in_any_notation_are_values():
     for args in (["--wob-kn", "-1e1"], ["--wob-kn", "-10"], ["--wob-kn=-1e1"]):
         proc = run("drill_sim", "simulate", *args, "--duration", "1", "--json")
@@ -170,6 +178,7 @@ def test_join_negative_values():
     assert join_negative_values(["--topics", "-x"]) == ["--topics", "-x"]
 
 
+@pytest.mark.offline
 def test_json_is_strict_where_a_quantity_is_undefined():
     # the bit never turns: the SSI (spread over mean speed) is undefined, printed as null
     proc = run("drill_sim", "simulate", "--groups", "n=1,psi=0.01,lambda=1000,beta=10", "--w0",
@@ -182,12 +191,14 @@ def test_json_is_strict_where_a_quantity_is_undefined():
     assert finite_or_none((1, -float("inf"))) == [1, None]
 
 
+@pytest.mark.offline
 def test_metrics_window_may_be_the_whole_run():
     proc = run("drill_sim", "simulate", "--duration", "2", "--metrics-window", "2", "--json")
     assert proc.returncode == 0, proc.stderr
     assert _strict(proc.stdout)["metrics_window"] == [0.0, 2.0]
 
 
+@pytest.mark.offline
 def test_stability_refusal_names_a_speed_that_works():
     proc = run("drill_sim", "stability", "--rpm", "9")
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
@@ -198,6 +209,7 @@ def test_stability_refusal_names_a_speed_that_works():
     assert _strict(ok.stdout)["complete"]
 
 
+@pytest.mark.offline
 def test_limits_themselves_are_accepted(tmp_path):
     for args in (["--rpm", "400", "--duration", "1"], ["--rpm", "0", "--duration", "1"],
                  ["--wob-kn", "-338", "--duration", "1"],

@@ -11,6 +11,8 @@ from drill_sim.cli.main import main
 from drill_sim.core import ParameterError, load_preset
 from drill_sim.core.sensor_profile import CHANNELS
 
+pytestmark = pytest.mark.offline        # its programs start no node
+
 
 def _simulate(tmp_path, name: str, *extra: str) -> dict[str, np.ndarray]:
     out = tmp_path / f"{name}.csv"

@@ -9,6 +9,8 @@ import subprocess
 import pytest
 from conftest import installed
 
+pytestmark = pytest.mark.offline        # its programs start no node
+
 
 def run(*args: str, check: bool = True) -> subprocess.CompletedProcess:
     proc = subprocess.run([installed("drill_sim"), *args], capture_output=True, text=True,

@@ -16,6 +16,8 @@ from conftest import installed
 import drill_sim.cli.map as map_command
 from drill_sim.cli.main import main
 
+pytestmark = pytest.mark.offline        # its programs start no node
+
 SMALL = ["--rpm", "40,60,150", "--wob-kn", "80,100", "--duration", "12"]
 
 
