@@ -62,7 +62,7 @@ A_DAMPED_ROT, A_DAMPED_AX, A_LOSS_ROT, A_LOSS_AX, A_WALL_ROT, A_WALL_AX = range(
                                                                               kn.NA + 6)
 NAD = kn.NA + 6                          # A_WALL_*: the wall's friction, dissipated likewise
 WALL_SWEEPS = 200                        # Gauss-Seidel sweeps at most (converged: 1e-11)
-NSCRATCH = 17                            # rows of ``advance``'s scratch (``_junctions_wall``)
+NSCRATCH = 18                            # rows of ``advance``'s scratch (``_junctions_wall``)
 # extra output columns: pipe torque and force on the BHA, top axial speed and force
 O_T_BOTTOM, O_F_BOTTOM, O_V_TOP, O_F_TOP = range(kn.NO, kn.NO + 4)
 NOD = kn.NO + 4
@@ -204,19 +204,25 @@ def _free(j, m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in, ws, wa, coup
 
 
 @njit(cache=True, inline="always")
-def _free_speeds(n_seg, z, c, rel, a_in, b_in, upper, speed):
-    """The stations' speeds with no wall, ``speed[1..m-1]``: each junction's balance of the
-    arriving invariants, its dashpot and the relative dashpots (``_junctions``' tridiagonal
-    system A w = a_in[j-1] - b_in[j]), by elimination (``upper``: scratch)."""
-    m = n_seg.size
-    upper[0] = 0.0
-    speed[0] = 0.0
+def _free_speeds(m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in, upper, ws, wa):
+    """The stations' speeds with no wall, ``ws[1..m-1]`` and ``wa[1..m-1]``: each junction's
+    balance of the arriving invariants, its dashpot and the relative dashpots (``_junctions``'
+    tridiagonal system A w = a_in[j-1] - b_in[j]), by elimination, both lines in one pass
+    (their chains of divisions overlap; ``upper`` (2, m): scratch)."""
+    ut = ua = 0.0
+    ws[0] = wa[0] = 0.0
     for j in range(1, m):
-        denom = z[j - 1] + z[j] + c[j - 1] + rel[j - 1] + rel[j] - rel[j - 1] * upper[j - 1]
-        upper[j] = rel[j] / denom
-        speed[j] = (a_in[j - 1] - b_in[j] + rel[j - 1] * speed[j - 1]) / denom
+        dt = tz[j - 1] + tz[j] + tc[j - 1] + tr[j - 1] + tr[j] - tr[j - 1] * ut
+        da = az[j - 1] + az[j] + ac[j - 1] + ar[j - 1] + ar[j] - ar[j - 1] * ua
+        ut = tr[j] / dt
+        ua = ar[j] / da
+        upper[0, j] = ut
+        upper[1, j] = ua
+        ws[j] = (ta_in[j - 1] - tb_in[j] + tr[j - 1] * ws[j - 1]) / dt
+        wa[j] = (aa_in[j - 1] - ab_in[j] + ar[j - 1] * wa[j - 1]) / da
     for j in range(m - 2, 0, -1):
-        speed[j] += upper[j] * speed[j + 1]
+        ws[j] += upper[0, j] * ws[j + 1]
+        wa[j] += upper[1, j] * wa[j + 1]
 
 
 @njit(cache=True)
@@ -250,8 +256,7 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
     m = tn.size
     tbuf[toff[0] + tslot[0]] = tb_in[0] + 2.0 * tz[0] * om_top
     abuf[aoff[0] + aslot[0]] = ab_in[0] + 2.0 * az[0] * v_top
-    _free_speeds(tn, tz, tc, tr, ta_in, tb_in, upper, ws)
-    _free_speeds(an, az, ac, ar, aa_in, ab_in, upper, wa)
+    _free_speeds(m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in, upper, ws, wa)
     n_rub, at = w_cols.shape[1], m - 1          # a column: the stations, then the contacts
     coupled = False
     for j in range(m):
@@ -354,6 +359,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
     ta_in, tb_in, aa_in, ab_in = scratch[0], scratch[1], scratch[2], scratch[3]
     tslot, aslot = slots[0], slots[1]
     t_next, a_next = scratch[6:8], scratch[8:10]     # the low-passes' states after a step
+    ws, wa, upper = scratch[4], scratch[5], scratch[10:12]  # views made once, not per step
+    force, now, solved = scratch[12:14], scratch[14:16], scratch[16:18]
     for j in range(mt):                    # the slot each segment reads next: steps mod (N + 1)
         tslot[j] = k[kn.K_STEPS] % tn[j]
     for j in range(ma):
@@ -463,17 +470,17 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
             pt, pa, fw_t, fw_a = _junctions_wall(
                 tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_int / h,
                 abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top, v_int / h,
-                w_static, w_dynamic, w_kappa, sigma, w_cols, stuck, scratch[4], scratch[5],
-                scratch[10], scratch[11:13], scratch[13:15], scratch[15:17])
+                w_static, w_dynamic, w_kappa, sigma, w_cols, stuck, ws, wa, upper, force, now,
+                solved)
             damp_r += h * pt
             damp_a += h * pa
             wall_r += h * fw_t
             wall_a += h * fw_a
         else:
             damp_r += h * _junctions(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top,
-                                     om_int / h, scratch[4], scratch[5])
+                                     om_int / h, ws, wa)
             damp_a += h * _junctions(abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top,
-                                     v_int / h, scratch[4], scratch[5])
+                                     v_int / h, ws, wa)
         work_td += h * ts_top * om_top
         loss_r += h * lr
         loss_a += h * la
