@@ -241,12 +241,13 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
     columns of A^-1 are needed (``w_cols``, fixed: ``wall_columns``). The K contacts, coupled
     through the relative dashpots, are solved by Gauss-Seidel sweeps over the contacts alone,
     each exactly for the others' forces, until a sweep's changes of force move no contact
-    solved before them in the sweep by more than 1e-11 of the speeds (every contact then
-    solved for the others' final forces). A contact at rest that
-    breaks loose in a sweep slides for the rest of the step (held again only where the sliding
-    friction can hold it): the law within the step is then monotone and the sweeps converge
-    to its one solution (with the static threshold kept, a contact next to another can flip
-    between rest and sliding from sweep to sweep, with no solution to settle on).
+    solved before them in the sweep by more than 1e-11 of the speeds (each contact's, or its
+    speed free of the wall where it rests): every contact is then solved for the others'
+    final forces. A contact at rest that breaks loose in a sweep slides for the rest of the
+    step (held again only where the sliding friction can hold it): the law within the step is
+    then monotone and the sweeps converge to its one solution (with the static threshold
+    kept, a contact next to another can flip between rest and sliding from sweep to sweep,
+    with no solution to settle on).
 
     ``stuck``: each station's state, updated; ``force`` (2, K): the contacts' torques and
     axial forces, kept from step to step (the next step's first guess); ``ws``, ``wa``: the
@@ -292,7 +293,8 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
                 v, u2 = _slide(ra, r2, 1.0 / ga, d2, cap_d)
                 om = u2 / kap
             dft, dfa = (rt - om / gt) - force[0, k], (ra - v / ga) - force[1, k]
-            scale = max(scale, max(abs(om), abs(v)))
+            # the speeds' scale: the contact's own, or as free of the wall (one at rest)
+            scale = max(scale, max(max(abs(om), abs(v)), max(abs(rt * gt), abs(ra * ga))))
             force[0, k] += dft
             force[1, k] += dfa
             if coupled:                              # the others' speeds under the change
