@@ -62,7 +62,7 @@ A_DAMPED_ROT, A_DAMPED_AX, A_LOSS_ROT, A_LOSS_AX, A_WALL_ROT, A_WALL_AX = range(
                                                                               kn.NA + 6)
 NAD = kn.NA + 6                          # A_WALL_*: the wall's friction, dissipated likewise
 WALL_SWEEPS = 200                        # Gauss-Seidel sweeps at most (converged: 1e-11)
-NSCRATCH = 18                            # rows of ``advance``'s scratch (``_junctions_wall``)
+NSCRATCH = 16                            # rows of ``advance``'s scratch (``_junctions_wall``)
 # extra output columns: pipe torque and force on the BHA, top axial speed and force
 O_T_BOTTOM, O_F_BOTTOM, O_V_TOP, O_F_TOP = range(kn.NO, kn.NO + 4)
 NOD = kn.NO + 4
@@ -159,8 +159,8 @@ def _slide(r1, r2, d1, d2, cap):
     friction opposes u, so u_i = r_i/(d_i + lam) with lam = cap/|u|, the root of
     F(lam) = |(r_i lam/(d_i + lam))_i| - cap, increasing from F(0) = -cap; it lies between the
     isotropic roots d_min cap/(|r| - cap) and d_max cap/(|r| - cap). Newton from the left,
-    safeguarded by that bracket, to 1e-14 (5 to 8 steps; the friction force itself is then
-    r - d u, so the energy booked stays exact)."""
+    safeguarded by that bracket, to 1e-14 (one to eight steps; the friction force is then
+    r - d u)."""
     a1, a2 = abs(r1), abs(r2)
     excess = math.sqrt(a1 * a1 + a2 * a2) - cap
     lo, hi = min(d1, d2) * cap / excess, max(d1, d2) * cap / excess
@@ -186,50 +186,26 @@ def _slide(r1, r2, d1, d2, cap):
 
 
 @njit(cache=True, inline="always")
-def _free(j, m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in, ws, wa, coupled):
-    """Station j's resistances and free forces (torsional and axial: what the arriving waves
-    and the neighbours' relative dashpots give it at zero speed of its own)."""
-    dt = tz[j - 1] + tz[j] + tc[j - 1] + tr[j - 1] + tr[j]
-    da = az[j - 1] + az[j] + ac[j - 1] + ar[j - 1] + ar[j]
-    rt = ta_in[j - 1] - tb_in[j]
-    ra = aa_in[j - 1] - ab_in[j]
-    if coupled:
-        if j > 1:
-            rt += tr[j - 1] * ws[j - 1]
-            ra += ar[j - 1] * wa[j - 1]
-        if j < m - 1:
-            rt += tr[j] * ws[j + 1]
-            ra += ar[j] * wa[j + 1]
-    return dt, da, rt, ra
-
-
-@njit(cache=True, inline="always")
-def _free_speeds(m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in, upper, ws, wa):
+def _free_speeds(m, ta_in, tb_in, tr, aa_in, ab_in, ar, w_cols, row, ws, wa):
     """The stations' speeds with no wall, ``ws[1..m-1]`` and ``wa[1..m-1]``: each junction's
     balance of the arriving invariants, its dashpot and the relative dashpots (``_junctions``'
-    tridiagonal system A w = a_in[j-1] - b_in[j]), by elimination, both lines in one pass
-    (their chains of divisions overlap; ``upper`` (2, m): scratch)."""
-    ut = ua = 0.0
+    tridiagonal system A w = a_in[j-1] - b_in[j]), by elimination with A's fixed factors
+    (``w_cols[line, row]``: the upper factor by station, ``row + 1``: 1/pivot), both lines in
+    one pass."""
     ws[0] = wa[0] = 0.0
     for j in range(1, m):
-        dt = tz[j - 1] + tz[j] + tc[j - 1] + tr[j - 1] + tr[j] - tr[j - 1] * ut
-        da = az[j - 1] + az[j] + ac[j - 1] + ar[j - 1] + ar[j] - ar[j - 1] * ua
-        ut = tr[j] / dt
-        ua = ar[j] / da
-        upper[0, j] = ut
-        upper[1, j] = ua
-        ws[j] = (ta_in[j - 1] - tb_in[j] + tr[j - 1] * ws[j - 1]) / dt
-        wa[j] = (aa_in[j - 1] - ab_in[j] + ar[j - 1] * wa[j - 1]) / da
+        ws[j] = (ta_in[j - 1] - tb_in[j] + tr[j - 1] * ws[j - 1]) * w_cols[0, row + 1, j - 1]
+        wa[j] = (aa_in[j - 1] - ab_in[j] + ar[j - 1] * wa[j - 1]) * w_cols[1, row + 1, j - 1]
     for j in range(m - 2, 0, -1):
-        ws[j] += upper[0, j] * ws[j + 1]
-        wa[j] += upper[1, j] * wa[j + 1]
+        ws[j] += w_cols[0, row, j - 1] * ws[j + 1]
+        wa[j] += w_cols[1, row, j - 1] * wa[j + 1]
 
 
 @njit(cache=True)
 def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_bottom,
                     abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top, v_bottom,
-                    w_static, w_dynamic, w_kappa, sigma, w_cols, stuck, ws, wa, upper, force,
-                    now, solved):
+                    w_static, w_dynamic, w_kappa, sigma, w_cols, stuck, ws, wa, force, now,
+                    solved):
     """``_junctions`` for both lines at once where the wall rubs: at each station the axial
     and the tangential sliding are one Coulomb contact (the friction against the resultant
     sliding velocity, at most mu n L_part; exact and set-valued: a station at rest stays there
@@ -238,7 +214,8 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
 
     The stations are linear but for the wall: their speeds are the free ones less the wall's
     forces through the junctions' inverse, w = A^-1 (b - f), and only the K rubbing stations'
-    columns of A^-1 are needed (``w_cols``, fixed: ``wall_columns``). The K contacts, coupled
+    columns of A^-1 are needed (``w_cols``, fixed, with A's elimination factors:
+    ``wall_columns``). The K contacts, coupled
     through the relative dashpots, are solved by Gauss-Seidel sweeps over the contacts alone,
     each exactly for the others' forces, until a sweep's changes of force move no contact
     solved before them in the sweep by more than 1e-11 of the speeds (each contact's, or its
@@ -251,14 +228,14 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
 
     ``stuck``: each station's state, updated; ``force`` (2, K): the contacts' torques and
     axial forces, kept from step to step (the next step's first guess); ``ws``, ``wa``: the
-    stations' speeds; ``upper``, ``now`` (2, K: the contacts' speeds as the sweeps go),
+    stations' speeds; ``now`` (2, K: the contacts' speeds as the sweeps go),
     ``solved`` (2, K: as each contact's own solution last left them, rest exactly 0): scratch.
     Returns the dashpots' powers and the wall's, (torsional, axial, wall torsional, wall axial)."""
     m = tn.size
     tbuf[toff[0] + tslot[0]] = tb_in[0] + 2.0 * tz[0] * om_top
     abuf[aoff[0] + aslot[0]] = ab_in[0] + 2.0 * az[0] * v_top
-    _free_speeds(m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in, upper, ws, wa)
-    n_rub, at = w_cols.shape[1], m - 1          # a column: the stations, then the contacts
+    n_rub, at = w_cols.shape[1] - 2, m - 1      # a column: the stations, then the contacts
+    _free_speeds(m, ta_in, tb_in, tr, aa_in, ab_in, ar, w_cols, n_rub, ws, wa)
     coupled = False
     for j in range(m):
         if tr[j] > 0.0 or ar[j] > 0.0:
@@ -280,19 +257,20 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
             if w_static[j - 1] <= 0.0:
                 continue
             gt, ga = w_cols[0, k, at + k], w_cols[1, k, at + k]    # the contact's own compliances
-            rt = now[0, k] / gt + force[0, k]                  # its free torque and axial force
-            ra = now[1, k] / ga + force[1, k]
+            dt, da = w_cols[0, n_rub, at + k], w_cols[1, n_rub, at + k]   # their inverses
+            rt = now[0, k] * dt + force[0, k]                  # its free torque and axial force
+            ra = now[1, k] * da + force[1, k]
             kap, cap_s, cap_d = w_kappa[j - 1], w_static[j - 1], w_dynamic[j - 1]
             r2 = rt * sigma / kap                    # torque -> tangential force [F*]
-            d2 = sigma / (gt * kap * kap)
+            d2 = dt * sigma / (kap * kap)
             rn = math.sqrt(ra * ra + r2 * r2)
             if rn <= (cap_s if stuck[j - 1] else cap_d):
                 om, v = 0.0, 0.0
             else:
                 stuck[j - 1] = 0                     # broken loose: it slides this step
-                v, u2 = _slide(ra, r2, 1.0 / ga, d2, cap_d)
+                v, u2 = _slide(ra, r2, da, d2, cap_d)
                 om = u2 / kap
-            dft, dfa = (rt - om / gt) - force[0, k], (ra - v / ga) - force[1, k]
+            dft, dfa = (rt - om * dt) - force[0, k], (ra - v * da) - force[1, k]
             # the speeds' scale: the contact's own, or as free of the wall (one at rest)
             scale = max(scale, max(max(abs(om), abs(v)), max(abs(rt * gt), abs(ra * ga))))
             force[0, k] += dft
@@ -319,14 +297,14 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
             ws[j], wa[j] = solved[0, k], solved[1, k]
             k += 1
     power_t = power_a = wall_t = wall_a = 0.0
+    k = 0
     for j in range(1, m):
         om, v = ws[j], wa[j]
         if w_static[j - 1] > 0.0:
             stuck[j - 1] = 1 if om == 0.0 and v == 0.0 else 0
-            dt, da, rt, ra = _free(j, m, tz, tc, tr, ta_in, tb_in, az, ac, ar, aa_in, ab_in,
-                                   ws, wa, True)
-            wall_t += (rt - dt * om) * om           # the wall's torque times the speed
-            wall_a += (ra - da * v) * v
+            wall_t += force[0, k] * om              # the wall's torque times the speed
+            wall_a += force[1, k] * v               # (the balance's to the solve's 1e-11)
+            k += 1
         power_t += tc[j - 1] * om * om
         power_a += ac[j - 1] * v * v
         if j < m - 1:
@@ -361,8 +339,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
     ta_in, tb_in, aa_in, ab_in = scratch[0], scratch[1], scratch[2], scratch[3]
     tslot, aslot = slots[0], slots[1]
     t_next, a_next = scratch[6:8], scratch[8:10]     # the low-passes' states after a step
-    ws, wa, upper = scratch[4], scratch[5], scratch[10:12]  # views made once, not per step
-    force, now, solved = scratch[12:14], scratch[14:16], scratch[16:18]
+    ws, wa = scratch[4], scratch[5]                  # views made once, not per step
+    force, now, solved = scratch[10:12], scratch[12:14], scratch[14:16]
     for j in range(mt):                    # the slot each segment reads next: steps mod (N + 1)
         tslot[j] = k[kn.K_STEPS] % tn[j]
     for j in range(ma):
@@ -472,8 +450,7 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
             pt, pa, fw_t, fw_a = _junctions_wall(
                 tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_int / h,
                 abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top, v_int / h,
-                w_static, w_dynamic, w_kappa, sigma, w_cols, stuck, ws, wa, upper, force, now,
-                solved)
+                w_static, w_dynamic, w_kappa, sigma, w_cols, stuck, ws, wa, force, now, solved)
             damp_r += h * pt
             damp_a += h * pa
             wall_r += h * fw_t

@@ -77,18 +77,25 @@ def wall_columns(lines: tuple[_Line, _Line], static: np.ndarray) -> np.ndarray:
     """The junctions' inverse where the wall rubs (``distributed_kernel._junctions_wall``):
     for each line (torsional, axial) and rubbing station k, the speeds a unit force at k gives
     every station (A^-1 e_k, with A the junctions' tridiagonal system: the impedances, the
-    dashpot, the relative dashpots on either side) then every rubbing station; shape
-    (2, K, M + K), M the stations. Fixed: A does not change with the state."""
+    dashpot, the relative dashpots on either side) then every rubbing station; then two rows,
+    A's elimination factors by station (the upper factor, 1/pivot); shape (2, K + 2, M + K),
+    M the stations. Fixed: A does not change with the state."""
     rub = np.flatnonzero(static > 0.0)
-    m = lines[0].z.size - 1
-    out = np.zeros((2, rub.size, m + rub.size))
+    k, m = rub.size, lines[0].z.size - 1
+    out = np.zeros((2, k + 2, m + k))
     for i, line in enumerate(lines):
         z, c, rel = line.z, line.c, line.rel
         a = np.diag(z[:-1] + z[1:] + c[:-1] + rel[:-1] + rel[1:])
         a -= np.diag(rel[1:-1], 1) + np.diag(rel[1:-1], -1)
         cols = np.linalg.solve(a, np.eye(m)[:, rub]).T
-        out[i, :, :m] = cols
-        out[i, :, m:] = cols[:, rub]
+        out[i, :k, :m] = cols
+        out[i, :k, m:] = cols[:, rub]
+        upper = 0.0                              # the elimination's fixed factors
+        for j in range(m):
+            pivot = a[j, j] - rel[j] * upper     # rel[j]: the part above station j + 1
+            upper = rel[j + 1] / pivot
+            out[i, k, j], out[i, k + 1, j] = upper, 1.0 / pivot
+        out[i, k, m:] = 1.0 / np.diag(cols[:, rub])     # each contact's resistance
     return out
 
 

@@ -133,8 +133,8 @@ BREAKS: tuple[Break, ...] = (
         "",
         f"{T_WELL}::test_every_rubbing_station_obeys_coulombs_law_at_every_step"),
     one("the wall's dissipation not booked", CORE + "distributed_kernel.py",
-        "            wall_t += (rt - dt * om) * om           # the wall's torque times the speed\n",
-        "            wall_t += 0.0 * (rt - dt * om) * om\n",
+        "            wall_t += force[0, k] * om              # the wall's torque times the speed\n",
+        "            wall_t += 0.0 * force[0, k] * om\n",
         f"{T_WELL}::test_energy_balance_includes_the_walls_friction"),
     # ---- sensors ------------------------------------------------------------------------
     one("severity divided by the mid-range, not the mean", CORE + "sensors.py",
