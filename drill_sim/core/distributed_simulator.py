@@ -77,9 +77,10 @@ def wall_columns(lines: tuple[_Line, _Line], static: np.ndarray) -> np.ndarray:
     """The junctions' inverse where the wall rubs (``distributed_kernel._junctions_wall``):
     for each line (torsional, axial) and rubbing station k, the speeds a unit force at k gives
     every station (A^-1 e_k, with A the junctions' tridiagonal system: the impedances, the
-    dashpot, the relative dashpots on either side) then every rubbing station; then two rows,
-    A's elimination factors by station (the upper factor, 1/pivot); shape (2, K + 2, M + K),
-    M the stations. Fixed: A does not change with the state."""
+    dashpot, the relative dashpots on either side) then every rubbing station; then two rows:
+    A's elimination factors by station (the upper factor, then after the stations each
+    contact's resistance 1/(A^-1)_kk; 1/pivot). Shape (2, K + 2, M + K), M the stations.
+    Fixed: A does not change with the state."""
     rub = np.flatnonzero(static > 0.0)
     k, m = rub.size, lines[0].z.size - 1
     out = np.zeros((2, k + 2, m + k))
