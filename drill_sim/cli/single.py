@@ -176,9 +176,15 @@ def resolve_timing(args: argparse.Namespace, case: Case, default_s: float,
 
 
 def resolve_start(args: argparse.Namespace, case: Case) -> tuple[float, float]:
-    """--gap (in the user's length unit) and --perturbation, checked."""
+    """--gap (in the user's length unit) and --perturbation, checked; a gap is refused without
+    --start rest, where it would be silently ignored."""
     gap = in_range("--gap", args.gap, 0.0, GAP_MAX_M if case.si else GAP_MAX,
                    unit="m" if case.si else "L*", what="a bit height above bottom")
+    if gap > 0.0 and args.start != "rest":
+        start = (f"--start {args.start}" if args.start else
+                 "the default start (steady drilling where it exists)")
+        raise UsageError(f"--gap {args.gap:g} does nothing with {start}; expected it with "
+                         "--start rest (the bit at rest that height above bottom)")
     perturbation = in_range("--perturbation", args.perturbation, *PERTURBATION_RANGE,
                             what="a relative perturbation of the bit speed")
     return gap, perturbation

@@ -51,6 +51,8 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
         raise UsageError(f"--string-model distributed with --re-min {args.re_min}: {exc}") \
             from None
     t_star = case.preset.rig.scales.time_s
+    well = case.preset.string.well
+    rubs = well is not None and well.rubs        # set-valued: no linear root sees it
     tors, axial = natural_frequencies(waves, case.groups.psi, count=TORSIONAL_MODES)
     hz = 1.0 / (2.0 * math.pi * t_star)
     roots = [[float(r.real), float(r.imag)] for r in res.roots]
@@ -82,6 +84,7 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
            "torsional_frequencies_hz": [float(f * hz) for f in tors],
            "axial_frequencies_hz": [float(f * hz) for f in axial[:AXIAL_MODES]],
            "modes": modes, "modes_complete": damped.complete,
+           "wall_friction_left_out": rubs,
            "modes_boundary": boundary, **law_gains,
            **({} if closed is None else {"closed_loop_on_bottom": {
                "stable": closed.stable,
@@ -101,6 +104,10 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
     print(f"distributed string, preset {case.preset.name}: steady drilling at depth of cut per "
           f"blade {steady.delta_n0:.4g} L*, torque {steady.t0:.4g} C, delay "
           f"{steady.tau_n0:.4g} t*")
+    if rubs:
+        print("the well's friction along the string is left out of these roots and modes (it is "
+              "set-valued, not linear: msg_docs/model.md, \"A deviated well\"); a simulation "
+              "has it")
     print("bit on bottom, the top held (the bit's own regenerative stability, whatever law runs "
           "at the top):")
     print(f"{'stable' if res.stable else 'UNSTABLE'}: {len(roots)} roots of Delta_d(s) in the "

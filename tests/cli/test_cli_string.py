@@ -76,6 +76,18 @@ def test_stability_distributed_roots_check_and_frequencies():
     assert "torsional 0.555, 1.830, 3.271 Hz; axial 1.858, 4.078 Hz" in text
     lumped = json.loads(run("stability", "--json").stdout)
     assert "string_model" not in lumped and lumped["complete"]
+    assert out["wall_friction_left_out"] is False and "left out" not in text
+
+
+def test_stability_on_a_well_that_rubs_says_the_walls_friction_is_left_out():
+    """field_a rubs along its built section: its roots and modes are the linear string's, and
+    the text and the JSON say the set-valued wall is not in them (a user comparing them with a
+    simulation of the same point sees why they differ)."""
+    out = json.loads(run("stability", "--preset", "field_a", "--string-model", "distributed",
+                         "--json").stdout)
+    assert out["wall_friction_left_out"] is True
+    text = run("stability", "--preset", "field_a", "--string-model", "distributed").stdout
+    assert "friction along the string is left out of these roots and modes" in text
 
 
 def test_stability_distributed_reports_the_damped_modes_with_the_drive_at_the_top():
