@@ -77,7 +77,7 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
            "omega0": case.omega0, "delta_n0": steady.delta_n0, "v0": steady.v0, "t0": steady.t0,
            "tau_n0": steady.tau_n0, "stable": res.stable, "roots": roots[:args.count],
            "roots_found": len(roots),
-           "roots_counted": res.count_argument_principle - res.roots_at_zero,
+           "roots_counted": res.counted,
            "complete": res.complete, "box": list(res.box),
            "completeness": "argument principle on the box's edge; roots with |Im s| > "
                            f"{IM_MAX:g} are not searched",
@@ -91,9 +91,8 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
                "roots": [[float(r.real), float(r.imag)] for r in closed.roots][:args.count],
                "roots_found": int(closed.roots.size),
                # the argument principle counts the roots less the law's poles in the box
-               "roots_counted": closed.count_argument_principle - closed.roots_at_zero,
-               "complete": bool(closed.roots.size
-                                >= closed.count_argument_principle - closed.roots_at_zero)}}),
+               "roots_counted": closed.counted,
+               "complete": bool(closed.roots.size >= closed.counted)}}),
            "units": "dimensionless: s in 1/t*, v0 in L*/t*, t0 in C, delta_n0 in L*; "
                     "frequencies in Hz (modes: the damped frequency Im s / 2 pi, damping ratio "
                     "-Re s / |s|)", "t_star_s": t_star}
@@ -113,8 +112,7 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
     print(f"{'stable' if res.stable else 'UNSTABLE'}: {len(roots)} roots of Delta_d(s) in the "
           f"box {x0:g} <= Re s <= {x1:g}, |Im s| <= {y1:g} /t* (up to {y1 * hz:.3g} Hz) besides "
           f"s = 0, {'all' if res.complete else 'NOT all'} of the "
-          f"{res.count_argument_principle - res.roots_at_zero} the argument principle counts on "
-          "the box's edge; "
+          f"{res.counted} the argument principle counts on the box's edge; "
           "roots above the box are not searched; rightmost:")
     for re, im in roots[:args.count]:
         print(f"  s = {re:+.6f} {im:+.6f}i  ({im * hz:+.3f} Hz)")
@@ -122,7 +120,7 @@ def run_distributed(args: argparse.Namespace, case: Case, steady: SteadyState,
         print(f"bit on bottom, {args.law} at the top (the closed loop; the law's own filters' "
               f"roots may be among them): {'stable' if closed.stable else 'UNSTABLE'}, "
               f"{closed.roots.size} roots found in the same box (the argument principle counts "
-              f"{closed.count_argument_principle - closed.roots_at_zero}: the roots less the "
+              f"{closed.counted}: the roots less the "
               "law's poles there); rightmost:")
         for r in closed.roots[:args.count]:
             print(f"  s = {r.real:+.6f} {r.imag:+.6f}i  ({r.imag * hz:+.3f} Hz)")

@@ -97,6 +97,15 @@ def session_sensors(p: dict[str, object], dt_s: float,
     return SensorBank(profile, dt_s, int(p.get("sensor_seed", 0)))
 
 
+def check_sensor_seed(seed: object, name: str = "sensor seed") -> None:
+    """A seed every tool takes: a whole number from 0 to MAX_SENSOR_SEED, or ParameterError
+    naming ``name``."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) \
+            or not 0 <= seed <= MAX_SENSOR_SEED:
+        raise ParameterError(f"{name} = {seed!r}: expected a whole number from 0 to "
+                             f"{MAX_SENSOR_SEED}")
+
+
 class SensorBank:
     """The sensors of one profile, called once per tick of ``dt_s`` [s] (the shortest interval
     between calls the delay buffers are sized for), with noise seeded by ``seed``."""
@@ -105,10 +114,7 @@ class SensorBank:
         self.profile = load_profile(profile) if isinstance(profile, str) else profile
         if not (isinstance(dt_s, (int, float)) and math.isfinite(dt_s) and dt_s > 0):
             raise ParameterError(f"dt_s = {dt_s!r}: expected a positive number of seconds")
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) \
-                or not 0 <= seed <= MAX_SENSOR_SEED:
-            raise ParameterError(f"sensor seed = {seed!r}: expected a whole number from 0 to "
-                                 f"{MAX_SENSOR_SEED}")
+        check_sensor_seed(seed)
         self.dt_s, self.seed = float(dt_s), int(seed)
         n = len(CHANNELS)
         specs = [self.profile.channels[c] for c in CHANNELS]

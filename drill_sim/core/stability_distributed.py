@@ -84,6 +84,12 @@ class StringStability:
     def stable(self) -> bool:
         return bool(self.roots.size == 0 or self.roots[0].real < 0.0)
 
+    @property
+    def counted(self) -> int:
+        """The roots besides s = 0 that the argument principle counts in the box (with a
+        law's top: its roots less the law's poles there)."""
+        return self.count_argument_principle - self.roots_at_zero
+
 
 def string_stability(groups: Groups, waves: StringWaves, w0: float, omega0: float, *,
                      re_min: float = -0.5, re_max: float = 5.0, im_max: float = 20.0,

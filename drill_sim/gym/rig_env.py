@@ -30,9 +30,10 @@ from ..control.evaluation import DEFAULT_PERTURBATION, LoopSettings
 from ..control.policy import OBSERVATION
 from ..control.scenarios import named
 from ..core import load_preset
+from ..core.distributed import check_string_model
 from ..core.parameters import ParameterError, check_number
 from ..core.sensor_profile import load_profile
-from ..core.sensors import MAX_SENSOR_SEED, Measured
+from ..core.sensors import Measured, check_sensor_seed
 from ..session.parameter_table import PERTURBATION_RANGE
 from ..session.scenario import Scenario
 
@@ -106,14 +107,10 @@ class RigEnv(gym.Env):
     @staticmethod
     def _check_session(string_model, sensor_profile, sensor_seed, perturbation) -> None:
         """What the episodes' sessions would refuse, refused here at construction."""
-        if string_model not in (None, "lumped", "distributed"):
-            raise ParameterError(f"string_model = {string_model!r}: expected lumped or "
-                                 "distributed (None: the preset's)")
+        if string_model is not None:                     # None: the preset's
+            check_string_model(string_model)
         load_profile(sensor_profile)                     # a ParameterError naming what is wrong
-        if isinstance(sensor_seed, bool) or not isinstance(sensor_seed, (int, np.integer)) \
-                or not 0 <= sensor_seed <= MAX_SENSOR_SEED:
-            raise ParameterError(f"sensor_seed = {sensor_seed!r}: expected a whole number from "
-                                 f"0 to {MAX_SENSOR_SEED}")
+        check_sensor_seed(sensor_seed, "sensor_seed")
         low, high = PERTURBATION_RANGE
         check_number("perturbation", perturbation, low=low, high=high, low_inclusive=True)
 
