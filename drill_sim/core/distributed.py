@@ -198,12 +198,27 @@ class WaveLine:
 
 
 @dataclass(frozen=True)
+class BhaContact:
+    """The rigid BHA against the wall, SI: the wall's whole force on it [N] (the soft string's
+    n integrated over its sections), the radius it rubs at [m] (its sections' radii weighted
+    by their share of that force, so that its break-off torque is mu_s sum n_i L_i r_i and its
+    axial drag mu sum n_i L_i exactly) and the friction coefficients (the well's)."""
+
+    normal_force_n: float
+    radius_m: float
+    friction_static: float
+    friction_dynamic: float
+
+
+@dataclass(frozen=True)
 class WallFriction:
     """The wall's Coulomb friction at the stations, aligned with the segments (the station at
-    each segment's bottom; 0 where there is none): the most the wall holds, static and sliding
+    each segment's bottom; 0 where there is none; the last segment's bottom is the rigid
+    BHA's one contact, ``BhaContact``): the most the wall holds, static and sliding
     [F*] (mu n L_part), and kappa = r/L* (the pipe's radius), with sigma = C/(F* L*): a torque
     tau [C] is the tangential force tau sigma/kappa [F*] and a turning speed omega [1/t*] the
-    sliding speed kappa omega [L*/t*] (``distributed_kernel._junctions_wall``)."""
+    sliding speed kappa omega [L*/t*] (``distributed_kernel._junctions_wall``, the BHA's in
+    ``distributed_kernel._bha_on_wall``)."""
 
     static: np.ndarray
     dynamic: np.ndarray
@@ -252,17 +267,23 @@ class StringWaves:
 def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float, *,
                  shear_modulus_pa: float = 77e9, young_modulus_pa: float = 200e9,
                  steel_density_kg_m3: float = 8000.0,
-                 stations: int = DAMPING_STATIONS, continuous: bool = False) -> StringWaves:
+                 stations: int = DAMPING_STATIONS, continuous: bool = False,
+                 bha: BhaContact | None = None) -> StringWaves:
     """The dimensionless wave lines of ``sections`` (top first) with the scales of ``params``
     (t* = sqrt(I/C) from the lumped C, I), at step ``h`` [t*]. ``continuous``: the theory's
     exact pipe (one segment per section, viscous damping continuous along it, no stations),
-    whose ``transfer`` the modes and the tests use; otherwise the simulation's lines."""
+    whose ``transfer`` the modes and the tests use; otherwise the simulation's lines.
+    ``bha``: the rigid BHA's contact with the wall (None: it does not rub)."""
     if not sections:
         raise ParameterError("sections: expected at least one pipe section")
     sc = params.scales
     ts, c_scale = sc.time_s, sc.stiffness_nm_per_rad
-    rubs = not continuous and any(sec.friction_static > 0.0 and any(sec.wall_n_m)
-                                  for sec in sections)
+    bha_rubs = bha is not None and bha.friction_static > 0.0 and bha.normal_force_n > 0.0
+    rubs = not continuous and (bha_rubs or any(sec.friction_static > 0.0 and any(sec.wall_n_m)
+                                               for sec in sections))
+    if rubs:          # a BHA rubbing below a pipe that does not: the pipe's stations hold 0
+        sections = tuple(sec if sec.wall_n_m else replace(sec, wall_n_m=(0.0,) * stations)
+                         for sec in sections)
     if rubs and any(len(sec.wall_n_m) != stations for sec in sections):
         raise ParameterError(f"sections: the wall's forces are given at {DAMPING_STATIONS} "
                              f"stations a section; expected stations = {DAMPING_STATIONS}")
@@ -311,12 +332,16 @@ def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float,
         lines.append(WaveLine(np.array(z), np.array(delay), np.array(steps, dtype=np.int64),
                               np.array(dash), h, np.array(frac), np.array(rel), np.array(tau),
                               np.array(eta), np.array(nu)))
-    return StringWaves(lines[0], lines[1], h, _wall(params, sections, stations) if rubs else None)
+    return StringWaves(lines[0], lines[1], h,
+                       _wall(params, sections, stations, bha if bha_rubs else None)
+                       if rubs else None)
 
 
-def _wall(params: RigParameters, sections: tuple[Section, ...], k: int) -> WallFriction:
+def _wall(params: RigParameters, sections: tuple[Section, ...], k: int,
+          bha: BhaContact | None) -> WallFriction:
     """The wall's friction at the stations (k a section), aligned with the segments: section
-    by section, k segments ending at a station, then the one ending at the next section."""
+    by section, k segments ending at a station, then the one ending at the next section (the
+    last one's: the BHA's contact, or none)."""
     sc = params.scales
     static, dynamic, kappa = [], [], []
     for sec in sections:
@@ -330,6 +355,10 @@ def _wall(params: RigParameters, sections: tuple[Section, ...], k: int) -> WallF
                 static.append(0.0)
                 dynamic.append(0.0)
                 kappa.append(1.0)
+    if bha is not None:
+        held = bha.normal_force_n / sc.force_n
+        static[-1], dynamic[-1] = bha.friction_static * held, bha.friction_dynamic * held
+        kappa[-1] = bha.radius_m / sc.length_m
     return WallFriction(np.array(static), np.array(dynamic), np.array(kappa),
                         sc.stiffness_nm_per_rad / (sc.force_n * sc.length_m))
 
@@ -350,4 +379,24 @@ def geometry_waves(params: RigParameters, geometry: StringGeometry, h: float,
         sections = tuple(replace(x, young_modulus_pa=young_modulus_pa) for x in sections)
     return string_waves(params, sections, h, shear_modulus_pa=geometry.shear_modulus_pa,
                         young_modulus_pa=geometry.young_modulus_pa,
-                        steel_density_kg_m3=geometry.steel_density_kg_m3, continuous=continuous)
+                        steel_density_kg_m3=geometry.steel_density_kg_m3, continuous=continuous,
+                        bha=bha_contact(geometry))
+
+
+def bha_contact(geometry: StringGeometry) -> BhaContact | None:
+    """The rigid BHA's contact with the wall (None: the well does not rub): the soft string's
+    wall force hanging off bottom over the BHA's sections, integrated by the midpoint rule at
+    the pipe's ``DAMPING_STATIONS`` stations a section (exact in straight hole)."""
+    well = geometry.well
+    if well is None or not well.rubs:
+        return None
+    fractions = [(j + 0.5) / DAMPING_STATIONS for j in range(DAMPING_STATIONS)]
+    force = moment = 0.0
+    for i, part in enumerate(geometry.parts()):
+        if part.bha:
+            held = sum(geometry.wall_forces_n_m(i, fractions)) * part.length_m / DAMPING_STATIONS
+            force += held
+            moment += held * 0.5 * part.od_m
+    if force <= 0.0:
+        return None
+    return BhaContact(force, moment / force, well.friction_static, well.friction_dynamic)

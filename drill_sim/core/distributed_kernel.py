@@ -55,7 +55,8 @@ follow(__file__, kn.__file__, bit_rock.__file__)   # the cache follows what it i
 # extra float state (after the lumped kernel's X_*, which keep their meaning; X_TS is the
 # surface torque at the top of the string)
 X_T_BOTTOM, X_F_BOTTOM, X_V_TOP, X_F_TOP, X_DOM, X_DV, X_A_PREV = range(kn.NX, kn.NX + 7)
-NXD = kn.NX + 7
+X_BHA_WALL_T, X_BHA_WALL_F = kn.NX + 7, kn.NX + 8    # the wall's torque [C], force [F*] on the BHA
+NXD = kn.NX + 9
 # extra accumulators: dashpot dissipation, torsional [C] and axial [F* L*]; the energy the
 # transport's weighting of two departures dissipates, likewise
 A_DAMPED_ROT, A_DAMPED_AX, A_LOSS_ROT, A_LOSS_AX, A_WALL_ROT, A_WALL_AX = range(kn.NA,
@@ -199,6 +200,52 @@ def _free_speeds(m, ta_in, tb_in, tr, aa_in, ab_in, ar, w_cols, row, ws, wa):
     for j in range(m - 2, 0, -1):
         ws[j] += w_cols[0, row, j - 1] * ws[j + 1]
         wa[j] += w_cols[1, row, j - 1] * wa[j + 1]
+
+
+@njit(cache=True)
+def _bha_on_wall(delta, slope, regime, v, om, ts, fb, rate, n, lam, beta, hs, hpsi, cap_s, cap_d,
+                 kap, sigma, held, ft, fa):
+    """The bit-rock laws with the rigid BHA rubbing on the wall: one Coulomb contact against
+    the BHA's resultant sliding velocity (v, kappa omega), at most ``cap_d`` sliding [F*]; one
+    at rest (``held``) stays there while ``cap_s`` holds the free force; in the scaled units of
+    ``WallFriction``. The wall's torque ``ft`` [C] and force ``fa`` [F*] oppose the BHA's
+    motion over the step: omega+ = omega + h (T_s - T - ft), likewise axially.
+
+    The two laws are solved together by alternating them, each exactly for the other's last
+    forces: the bit's set-valued laws (``_bit_rock_law``) under the pipe's torque and force
+    less the wall's, then the wall's contact under the BHA's speeds free of the wall (the
+    bit's forces held), until the wall's forces change by no more than 1e-12 of its capacity.
+    Turning steadily (the bit's torque does not depend on the speed) that is two passes. As
+    at the stations, a contact that breaks loose slides for the rest of the step. At rest
+    against both the rock and the wall, the split of the load between them is not
+    determined by a rigid BHA: the wall keeps the force it had and the rock's reaction takes
+    the change, so the BHA breaks loose when the bit's break-away limit and the wall's static
+    friction are both exceeded. Returns the laws' (regime, w, t, g, v+, omega+, event), then
+    (ft, fa, held) as solved; a BHA held by the wall has its speeds exactly 0."""
+    d_t, d_a = 1.0 / hs, 1.0 / hpsi                # the BHA's resistances to a step's change
+    d2 = d_t * sigma / (kap * kap)
+    tol_t, tol_a = 1e-12 * cap_s * kap / sigma, 1e-12 * cap_s
+    loose = False
+    hold = held
+    for _ in range(WALL_SWEEPS):
+        regime_new, w, t, g, v_new, om_new, event = _bit_rock_law(
+            delta, slope, regime, v, om, ts - ft, fb - fa, rate, n, lam, beta, hs, hpsi)
+        rt, ra = om_new * d_t + ft, v_new * d_a + fa     # the free torque and force
+        r2 = rt * sigma / kap                            # torque -> tangential force [F*]
+        if math.sqrt(ra * ra + r2 * r2) <= (cap_s if held and not loose else cap_d):
+            hold = True
+            nt, na = rt, ra
+        else:
+            hold = False
+            loose = True
+            va, u2 = _slide(ra, r2, d_a, d2, cap_d)
+            nt, na = rt - (u2 / kap) * d_t, ra - va * d_a
+        if abs(nt - ft) <= tol_t + 1e-12 * abs(nt) and abs(na - fa) <= tol_a + 1e-12 * abs(na):
+            break
+        ft, fa = nt, na
+    if hold:
+        v_new = om_new = 0.0
+    return regime_new, w, t, g, v_new, om_new, event, ft, fa, hold
 
 
 @njit(cache=True)
@@ -356,7 +403,13 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
     damp_r, damp_a = acc[A_DAMPED_ROT], acc[A_DAMPED_AX]
     loss_r, loss_a = acc[A_LOSS_ROT], acc[A_LOSS_AX]
     wall_r, wall_a = acc[A_WALL_ROT], acc[A_WALL_AX]
-    rubs = w_static.size > 0
+    rubs = w_cols.shape[1] > 2                       # the pipe's stations rub
+    bha_s = w_static[mt - 1] if w_static.size > 0 else 0.0
+    bha_rubs = bha_s > 0.0                           # the BHA's contact rubs
+    bha_d = w_dynamic[mt - 1] if bha_rubs else 0.0
+    bha_k = w_kappa[mt - 1] if bha_rubs else 1.0
+    held = bha_rubs and stuck[mt - 1] != 0
+    ft_w, fa_w = x[X_BHA_WALL_T], x[X_BHA_WALL_F]
     ts_top = x[kn.X_TS]
     # the top drive (kinematic: the ideal speed source omega0)
     mode = np.int64(p[kn.P_MODE])
@@ -406,8 +459,15 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
             phi_m = phi + h2 * om
             s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
             delta_new = u_m - s_m
-            regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
-                delta_new, slope, regime, v, om, ts, fb, rate, n, lam, beta, hs, hpsi)
+            if bha_rubs:
+                (regime_new, w_new, t_new, g_new, v_new, om_new, event, ft_new, fa_new,
+                 held_new) = _bha_on_wall(delta_new, slope, regime, v, om, ts, fb, rate, n, lam,
+                                          beta, hs, hpsi, bha_s, bha_d, bha_k, sigma, held,
+                                          ft_w, fa_w)
+            else:
+                regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
+                    delta_new, slope, regime, v, om, ts, fb, rate, n, lam, beta, hs, hpsi)
+                ft_new, fa_new, held_new = 0.0, 0.0, False
             if splits < MAX_SPLITS and EVENT_MARGIN < event < 1.0 - EVENT_MARGIN:
                 splits += 1
                 hs *= event
@@ -417,6 +477,7 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
                 refused = True
                 break
             regime, w, t, g, delta = regime_new, w_new, t_new, g_new, delta_new
+            ft_w, fa_w, held = ft_new, fa_new, held_new
             u_new = u_m + h2 * v_new
             k_last, s_behind, hole = _sweep(surf, mask, n_nodes, dth, inv_dth, k_last, s_behind,
                                             hole, phi, phi_new, u, u_new)
@@ -424,6 +485,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
             a = _accumulate(a, hs, regime, om_bar, v_bar, w, t, ts_top, 0.0)
             damp_r += hs * tc[mt - 1] * (om + h2 * dom) * om_bar
             damp_a += hs * ac[ma - 1] * (v + h2 * dv) * v_bar
+            wall_r += hs * ft_w * om_bar           # the wall's work on the BHA (0: no contact)
+            wall_a += hs * fa_w * v_bar
             om_int += hs * om_bar
             v_int += hs * v_bar
             sum_w += w * (hs / h)
@@ -502,6 +565,9 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
     x[kn.X_TS] = ts_top                      # _store wrote the lumped phi_td - phi
     x[X_T_BOTTOM], x[X_F_BOTTOM], x[X_V_TOP], x[X_F_TOP] = t_bot, f_bot, v_top, f_top
     x[X_DOM], x[X_DV], x[X_A_PREV] = dom, dv, a_prev
+    x[X_BHA_WALL_T], x[X_BHA_WALL_F] = ft_w, fa_w
+    if bha_rubs:
+        stuck[mt - 1] = 1 if held else 0
     acc[kn.A_TIME] += (steps - k[kn.K_STEPS]) * h
     acc[kn.A_W0] += (steps - k[kn.K_STEPS]) * h * w0
     acc[kn.A_OMEGA0] += (steps - k[kn.K_STEPS]) * h * om0

@@ -81,7 +81,7 @@ def wall_columns(lines: tuple[_Line, _Line], static: np.ndarray) -> np.ndarray:
     A's elimination factors by station (the upper factor, then after the stations each
     contact's resistance 1/(A^-1)_kk; 1/pivot). Shape (2, K + 2, M + K), M the stations.
     Fixed: A does not change with the state."""
-    rub = np.flatnonzero(static > 0.0)
+    rub = np.flatnonzero(static[:-1] > 0.0)     # the last: the BHA's contact, not a station
     k, m = rub.size, lines[0].z.size - 1
     out = np.zeros((2, k + 2, m + k))
     for i, line in enumerate(lines):
@@ -177,6 +177,8 @@ class StringSimulator(Simulator):
         x[dk.X_T_BOTTOM], x[dk.X_F_BOTTOM], x[dk.X_V_TOP] = st.t0, w_bit, st.v0
         x[dk.X_DOM] = x[dk.X_DV] = 0.0
         x[dk.X_A_PREV] = self._t.buf[self._t.off[-1]]
+        if wall_t is not None:                 # the BHA's contact, sliding
+            x[dk.X_BHA_WALL_T], x[dk.X_BHA_WALL_F] = wall_t[-1], wall_a[-1]
 
     def _wall_forces(self, v: float, omega: float) -> tuple[np.ndarray | None, ...]:
         """The wall's sliding friction at each station (torque [C], force [F*]), or Nones."""

@@ -1,12 +1,13 @@
 """The field preset ``field_a`` (Aarsnes & Shor's Well A) against figures computed here from the
 published geometry alone: its first torsional mode (the shaft with the BHA's inertia at the
 bottom, ≈ 0.22 Hz as they report), W_s along the hole's axis over the survey; and its off-bottom
-start-up: the string winds up, breaks loose, and at 60 rpm settles while at 10 rpm it keeps
-sticking (static friction above sliding friction: off-bottom stick-slip)."""
+start-up: the string winds up, breaks loose, and at 60 rpm keeps sticking (static friction
+above sliding friction: off-bottom stick-slip), where with static = sliding friction it settles."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -87,21 +88,24 @@ def _start_up(preset, rpm: float, duration_s: float) -> dict[str, np.ndarray]:
 
 
 @pytest.mark.slow(reason="two 45 s runs of the 2500 m string rubbing along the hole, ~6 s")
-def test_off_bottom_start_up_settles_at_60_rpm_and_sticks_on_at_10(field_a):
+def test_off_bottom_start_up_sticks_on_where_static_friction_exceeds_sliding(field_a):
     """The string stays put while the top winds it up (the bit turns only once the top has
-    turned more than a revolution), then breaks loose. At 60 rpm the swing after break-off
-    decays (sliding friction is a damper at a speed well above zero): no stick again, the bit
-    at the top's speed. At 10 rpm the bit swings back to rest: it sticks again and again."""
-    fast = _start_up(field_a, 60.0, 45.0)
-    loose = np.argmax(fast["bit"] > 1e-3)
-    top_turned = np.sum(fast["top"][:loose]) * 0.01
+    turned more than a revolution), then breaks loose. With their friction (static 0.885,
+    sliding 0.425) the torque released at break-off swings the bit back to rest and it sticks
+    again and again at 60 rpm (off-bottom stick-slip: the BHA's share alone drops by 8.6 kN m,
+    a swing of ~21 rad/s about the top's speed on the first mode). With static = sliding
+    (0.425) the same start-up settles: the bit never sticks again and ends at the top's
+    speed (10 %)."""
+    rubbing = _start_up(field_a, 60.0, 45.0)
+    loose = np.argmax(rubbing["bit"] > 1e-3)
+    top_turned = np.sum(rubbing["top"][:loose]) * 0.01
     assert top_turned > 2 * math.pi
-    after = fast["bit"][loose:] > 1e-6
-    assert after.all()
-    late = fast["t"] > 35.0
-    assert np.abs(fast["bit"][late] - 60 * RPM).max() < 0.1 * 60 * RPM
-    slow = _start_up(field_a, 10.0, 45.0)
-    stuck = slow["bit"] <= 1e-6
-    late = slow["t"] > 25.0
-    sticks_again = np.sum(np.diff(stuck[late].astype(int)) == 1)
-    assert sticks_again >= 3
+    stuck = rubbing["bit"] <= 1e-6
+    late = rubbing["t"] > 25.0
+    assert np.sum(np.diff(stuck[late].astype(int)) == 1) >= 3       # sticks again, 3+ times
+    well = replace(field_a.string.well, friction_static=0.425)
+    even = _start_up(replace(field_a, string=replace(field_a.string, well=well)), 60.0, 45.0)
+    loose = np.argmax(even["bit"] > 1e-3)
+    assert (even["bit"][loose:] > 1e-6).all()
+    late = even["t"] > 35.0
+    assert np.abs(even["bit"][late] - 60 * RPM).max() < 0.1 * 60 * RPM
