@@ -64,6 +64,11 @@ A_DAMPED_ROT, A_DAMPED_AX, A_LOSS_ROT, A_LOSS_AX, A_WALL_ROT, A_WALL_AX = range(
 NAD = kn.NA + 6                          # A_WALL_*: the wall's friction, dissipated likewise
 WALL_SWEEPS = 200                        # Gauss-Seidel sweeps at most (converged: 1e-11)
 NSCRATCH = 16                            # rows of ``advance``'s scratch (``_junctions_wall``)
+# the scratch's rows: arriving a and b (torsional, axial), the stations' speeds (torsional,
+# axial), the low-passes' next states (2 + 2), and the wall's contacts: forces, their speeds as
+# the sweeps go, as solved (2 each: torque, axial force)
+SC_TA, SC_TB, SC_AA, SC_AB, SC_WS, SC_WA = range(6)
+SC_FORCE, SC_NOW, SC_SOLVED = 10, 12, 14
 # extra output columns: pipe torque and force on the BHA, top axial speed and force
 O_T_BOTTOM, O_F_BOTTOM, O_V_TOP, O_F_TOP = range(kn.NO, kn.NO + 4)
 NOD = kn.NO + 4
@@ -187,19 +192,21 @@ def _slide(r1, r2, d1, d2, cap):
 
 
 @njit(cache=True, inline="always")
-def _free_speeds(m, ta_in, tb_in, tr, aa_in, ab_in, ar, w_cols, row, ws, wa):
-    """The stations' speeds with no wall, ``ws[1..m-1]`` and ``wa[1..m-1]``: each junction's
-    balance of the arriving invariants, its dashpot and the relative dashpots (``_junctions``'
-    tridiagonal system A w = a_in[j-1] - b_in[j]), by elimination with A's fixed factors
-    (``w_cols[line, row]``: the upper factor by station, ``row + 1``: 1/pivot), both lines in
-    one pass."""
-    ws[0] = wa[0] = 0.0
+def _free_speeds(m, sc, tr, ar, w_cols, row):
+    """The stations' speeds with no wall, ``sc[SC_WS, 1..m-1]`` and ``sc[SC_WA, 1..m-1]``: each
+    junction's balance of the arriving invariants, its dashpot and the relative dashpots
+    (``_junctions``' tridiagonal system A w = a_in[j-1] - b_in[j]), by elimination with A's
+    fixed factors (``w_cols[line, row]``: the upper factor by station, ``row + 1``: 1/pivot),
+    both lines in one pass."""
+    sc[SC_WS, 0] = sc[SC_WA, 0] = 0.0
     for j in range(1, m):
-        ws[j] = (ta_in[j - 1] - tb_in[j] + tr[j - 1] * ws[j - 1]) * w_cols[0, row + 1, j - 1]
-        wa[j] = (aa_in[j - 1] - ab_in[j] + ar[j - 1] * wa[j - 1]) * w_cols[1, row + 1, j - 1]
+        sc[SC_WS, j] = ((sc[SC_TA, j - 1] - sc[SC_TB, j] + tr[j - 1] * sc[SC_WS, j - 1])
+                        * w_cols[0, row + 1, j - 1])
+        sc[SC_WA, j] = ((sc[SC_AA, j - 1] - sc[SC_AB, j] + ar[j - 1] * sc[SC_WA, j - 1])
+                        * w_cols[1, row + 1, j - 1])
     for j in range(m - 2, 0, -1):
-        ws[j] += w_cols[0, row, j - 1] * ws[j + 1]
-        wa[j] += w_cols[1, row, j - 1] * wa[j + 1]
+        sc[SC_WS, j] += w_cols[0, row, j - 1] * sc[SC_WS, j + 1]
+        sc[SC_WA, j] += w_cols[1, row, j - 1] * sc[SC_WA, j + 1]
 
 
 @njit(cache=True)
@@ -248,11 +255,10 @@ def _bha_on_wall(delta, slope, regime, v, om, ts, fb, rate, n, lam, beta, hs, hp
     return regime_new, w, t, g, v_new, om_new, event, ft, fa, hold
 
 
-@njit(cache=True)
-def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_bottom,
-                    abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top, v_bottom,
-                    w_static, w_dynamic, w_kappa, sigma, w_cols, stuck, ws, wa, force, now,
-                    solved):
+@njit(cache=True, inline="always")
+def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, abuf, aoff, an, az, ac, ar, aslot,
+                    om_top, om_bottom, v_top, v_bottom, w_static, w_dynamic, w_kappa, sigma,
+                    w_cols, stuck, sc):
     """``_junctions`` for both lines at once where the wall rubs: at each station the axial
     and the tangential sliding are one Coulomb contact (the friction against the resultant
     sliding velocity, at most mu n L_part; exact and set-valued: a station at rest stays there
@@ -273,16 +279,21 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
     kept, a contact next to another can flip between rest and sliding from sweep to sweep,
     with no solution to settle on).
 
-    ``stuck``: each station's state, updated; ``force`` (2, K): the contacts' torques and
-    axial forces, kept from step to step (the next step's first guess); ``ws``, ``wa``: the
-    stations' speeds; ``now`` (2, K: the contacts' speeds as the sweeps go),
-    ``solved`` (2, K: as each contact's own solution last left them, rest exactly 0): scratch.
+    ``stuck``: each station's state, updated. ``sc``: ``advance``'s scratch, read and written
+    by row (no views: a view counts a reference to its array each step): the arriving
+    invariants (SC_TA ..), the stations' speeds (SC_WS, SC_WA); the contacts' torques and axial
+    forces (SC_FORCE, SC_FORCE + 1; kept from step to step, the next step's first guess), their
+    speeds as the sweeps go (SC_NOW ..) and as each contact's own solution last left them, rest
+    exactly 0 (SC_SOLVED ..).
+    Inlined, with at most 30 arguments (a call of more is compiled as one with *args, which
+    is not inlined, and a call that is not inlined counts a reference to each of its arrays,
+    atomically, on every step: a third of field_a's step).
     Returns the dashpots' powers and the wall's, (torsional, axial, wall torsional, wall axial)."""
     m = tn.size
-    tbuf[toff[0] + tslot[0]] = tb_in[0] + 2.0 * tz[0] * om_top
-    abuf[aoff[0] + aslot[0]] = ab_in[0] + 2.0 * az[0] * v_top
+    tbuf[toff[0] + tslot[0]] = sc[SC_TB, 0] + 2.0 * tz[0] * om_top
+    abuf[aoff[0] + aslot[0]] = sc[SC_AB, 0] + 2.0 * az[0] * v_top
     n_rub, at = w_cols.shape[1] - 2, m - 1      # a column: the stations, then the contacts
-    _free_speeds(m, ta_in, tb_in, tr, aa_in, ab_in, ar, w_cols, n_rub, ws, wa)
+    _free_speeds(m, sc, tr, ar, w_cols, n_rub)
     coupled = False
     for j in range(m):
         if tr[j] > 0.0 or ar[j] > 0.0:
@@ -290,11 +301,11 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
     k = 0                                        # the contacts' speeds under the last forces
     for j in range(1, m):
         if w_static[j - 1] > 0.0:
-            om, v = ws[j], wa[j]
+            om, v = sc[SC_WS, j], sc[SC_WA, j]
             for q in range(n_rub):
-                om -= w_cols[0, q, at + k] * force[0, q]
-                v -= w_cols[1, q, at + k] * force[1, q]
-            now[0, k], now[1, k] = om, v
+                om -= w_cols[0, q, at + k] * sc[SC_FORCE, q]
+                v -= w_cols[1, q, at + k] * sc[SC_FORCE + 1, q]
+            sc[SC_NOW, k], sc[SC_NOW + 1, k] = om, v
             k += 1
     for _ in range(WALL_SWEEPS if coupled else 1):
         moved = 0.0
@@ -305,8 +316,8 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
                 continue
             gt, ga = w_cols[0, k, at + k], w_cols[1, k, at + k]    # the contact's own compliances
             dt, da = w_cols[0, n_rub, at + k], w_cols[1, n_rub, at + k]   # their inverses
-            rt = now[0, k] * dt + force[0, k]                  # its free torque and axial force
-            ra = now[1, k] * da + force[1, k]
+            rt = sc[SC_NOW, k] * dt + sc[SC_FORCE, k]      # its free torque and axial force
+            ra = sc[SC_NOW + 1, k] * da + sc[SC_FORCE + 1, k]
             kap, cap_s, cap_d = w_kappa[j - 1], w_static[j - 1], w_dynamic[j - 1]
             r2 = rt * sigma / kap                    # torque -> tangential force [F*]
             d2 = dt * sigma / (kap * kap)
@@ -317,56 +328,59 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_
                 stuck[j - 1] = 0                     # broken loose: it slides this step
                 v, u2 = _slide(ra, r2, da, d2, cap_d)
                 om = u2 / kap
-            dft, dfa = (rt - om * dt) - force[0, k], (ra - v * da) - force[1, k]
+            dft, dfa = (rt - om * dt) - sc[SC_FORCE, k], (ra - v * da) - sc[SC_FORCE + 1, k]
             # the speeds' scale: the contact's own, or as free of the wall (one at rest)
             scale = max(scale, max(max(abs(om), abs(v)), max(abs(rt * gt), abs(ra * ga))))
-            force[0, k] += dft
-            force[1, k] += dfa
+            sc[SC_FORCE, k] += dft
+            sc[SC_FORCE + 1, k] += dfa
             if coupled:                              # the others' speeds under the change
                 for q in range(n_rub):
                     ct, ca = w_cols[0, k, at + q] * dft, w_cols[1, k, at + q] * dfa
-                    now[0, q] -= ct
-                    now[1, q] -= ca
+                    sc[SC_NOW, q] -= ct
+                    sc[SC_NOW + 1, q] -= ca
                     if q < k:                        # solved this sweep: now off by that
                         moved = max(moved, max(abs(ct), abs(ca)))
-            now[0, k], now[1, k] = om, v
-            solved[0, k], solved[1, k] = om, v
+            sc[SC_NOW, k], sc[SC_NOW + 1, k] = om, v
+            sc[SC_SOLVED, k], sc[SC_SOLVED + 1, k] = om, v
             k += 1
         if moved <= 1e-11 * scale:
             break
     for j in range(1, m):                        # every station under the contacts' forces
         for q in range(n_rub):
-            ws[j] -= w_cols[0, q, j - 1] * force[0, q]
-            wa[j] -= w_cols[1, q, j - 1] * force[1, q]
+            sc[SC_WS, j] -= w_cols[0, q, j - 1] * sc[SC_FORCE, q]
+            sc[SC_WA, j] -= w_cols[1, q, j - 1] * sc[SC_FORCE + 1, q]
     k = 0
     for j in range(1, m):                        # the contacts exactly as solved (rest: 0)
         if w_static[j - 1] > 0.0:
-            ws[j], wa[j] = solved[0, k], solved[1, k]
+            sc[SC_WS, j], sc[SC_WA, j] = sc[SC_SOLVED, k], sc[SC_SOLVED + 1, k]
             k += 1
     power_t = power_a = wall_t = wall_a = 0.0
     k = 0
     for j in range(1, m):
-        om, v = ws[j], wa[j]
+        om, v = sc[SC_WS, j], sc[SC_WA, j]
         if w_static[j - 1] > 0.0:
             stuck[j - 1] = 1 if om == 0.0 and v == 0.0 else 0
-            wall_t += force[0, k] * om              # the wall's torque times the speed
-            wall_a += force[1, k] * v               # (the balance's to the solve's 1e-11)
+            wall_t += sc[SC_FORCE, k] * om              # the wall's torque times the speed
+            wall_a += sc[SC_FORCE + 1, k] * v               # (the balance's to the solve's 1e-11)
             k += 1
         power_t += tc[j - 1] * om * om
         power_a += ac[j - 1] * v * v
         if j < m - 1:
-            power_t += tr[j] * (om - ws[j + 1]) ** 2
-            power_a += ar[j] * (v - wa[j + 1]) ** 2
-        tbuf[toff[j - 1] + tn[j - 1] + tslot[j - 1]] = ta_in[j - 1] - 2.0 * tz[j - 1] * om
-        tbuf[toff[j] + tslot[j]] = tb_in[j] + 2.0 * tz[j] * om
-        abuf[aoff[j - 1] + an[j - 1] + aslot[j - 1]] = aa_in[j - 1] - 2.0 * az[j - 1] * v
-        abuf[aoff[j] + aslot[j]] = ab_in[j] + 2.0 * az[j] * v
-    tbuf[toff[m - 1] + tn[m - 1] + tslot[m - 1]] = ta_in[m - 1] - 2.0 * tz[m - 1] * om_bottom
-    abuf[aoff[m - 1] + an[m - 1] + aslot[m - 1]] = aa_in[m - 1] - 2.0 * az[m - 1] * v_bottom
+            power_t += tr[j] * (om - sc[SC_WS, j + 1]) ** 2
+            power_a += ar[j] * (v - sc[SC_WA, j + 1]) ** 2
+        tbuf[toff[j - 1] + tn[j - 1] + tslot[j - 1]] = sc[SC_TA, j - 1] - 2.0 * tz[j - 1] * om
+        tbuf[toff[j] + tslot[j]] = sc[SC_TB, j] + 2.0 * tz[j] * om
+        abuf[aoff[j - 1] + an[j - 1] + aslot[j - 1]] = sc[SC_AA, j - 1] - 2.0 * az[j - 1] * v
+        abuf[aoff[j] + aslot[j]] = sc[SC_AB, j] + 2.0 * az[j] * v
+    tbuf[toff[m - 1] + tn[m - 1] + tslot[m - 1]] = sc[SC_TA, m - 1] - 2.0 * tz[m - 1] * om_bottom
+    abuf[aoff[m - 1] + an[m - 1] + aslot[m - 1]] = sc[SC_AA, m - 1] - 2.0 * az[m - 1] * v_bottom
     return power_t, power_a, wall_t, wall_a
 
 
-@njit(cache=True)
+# without numba's runtime (it allocates nothing): with it, every array a callee inlined in the
+# loop takes is reference-counted, atomically, on each step, a fifth of a step without the
+# wall and a third with it (field_a)
+@njit(cache=True, _nrt=False)
 def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, az, an, af, ac,
             ar, aoff, abuf, alp, astate, scratch, slots, w_static, w_dynamic, w_kappa, sigma,
             w_cols, stuck, n_steps, out, out_every, out_row):
@@ -387,7 +401,6 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
     tslot, aslot = slots[0], slots[1]
     t_next, a_next = scratch[6:8], scratch[8:10]     # the low-passes' states after a step
     ws, wa = scratch[4], scratch[5]                  # views made once, not per step
-    force, now, solved = scratch[10:12], scratch[12:14], scratch[14:16]
     for j in range(mt):                    # the slot each segment reads next: steps mod (N + 1)
         tslot[j] = k[kn.K_STEPS] % tn[j]
     for j in range(ma):
@@ -511,9 +524,9 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
         # the string: reflections at the BHA, junctions, the top
         if rubs:
             pt, pa, fw_t, fw_a = _junctions_wall(
-                tbuf, toff, tn, tz, tc, tr, tslot, ta_in, tb_in, om_top, om_int / h,
-                abuf, aoff, an, az, ac, ar, aslot, aa_in, ab_in, v_top, v_int / h,
-                w_static, w_dynamic, w_kappa, sigma, w_cols, stuck, ws, wa, force, now, solved)
+                tbuf, toff, tn, tz, tc, tr, tslot, abuf, aoff, an, az, ac, ar, aslot, om_top,
+                om_int / h, v_top, v_int / h, w_static, w_dynamic, w_kappa, sigma, w_cols, stuck,
+                scratch)
             damp_r += h * pt
             damp_a += h * pa
             wall_r += h * fw_t
