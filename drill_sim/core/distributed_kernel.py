@@ -75,7 +75,12 @@ NOD = kn.NO + 4
 # extra commands: the hook's mode (0: force, the hook holds w0; 1: position, the drawworks
 # moves the block at C_V_BLOCK [L*/t*], positive down, and the string's top follows it)
 C_HOOK_POSITION, C_V_BLOCK = kn.NC, kn.NC + 1
-NCD = kn.NC + 2
+# the top reflecting nothing (kinematic mode only; 0: the speed imposed): it sends down the
+# torsional invariant C_TOP_LEVEL [C] whatever arrives, a torque source behind the top
+# section's own impedance, its torque held within [C_TOP_T_MIN, C_TOP_T_MAX] [C]
+# (``StringSimulator.absorb_at_top``)
+C_TOP_ABSORB, C_TOP_LEVEL, C_TOP_T_MIN, C_TOP_T_MAX = range(kn.NC + 2, kn.NC + 6)
+NCD = kn.NC + 6
 
 
 @njit(cache=True, inline="always")
@@ -391,6 +396,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
     inv_dth, dth = p[kn.P_INV_DTHETA], p[kn.P_DTHETA]
     w0, om0, v_min = c[kn.C_W0], c[kn.C_OMEGA0], c[kn.C_V_MIN]
     block, v_block = c[C_HOOK_POSITION] != 0.0, c[C_V_BLOCK]
+    absorb, level = c[C_TOP_ABSORB] != 0.0, c[C_TOP_LEVEL]
+    top_lo, top_hi = c[C_TOP_T_MIN], c[C_TOP_T_MAX]
     n_nodes = surf.shape[0]
     mask = n_nodes - 1
     sector = n_nodes * dth
@@ -435,7 +442,7 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
     hj = h / p[kn.P_J]
     hj_top = hj / (1.0 + 0.5 * hj * z_top)        # the string's b + z Omega, trapezoidal
     om_td, integral, tm, ref, a_otd, a_tm, a_wm, work_td = _load_drive(x, acc)
-    if not drive:
+    if not drive and not absorb:
         om_td = om0
     for _ in range(n_steps):
         lr, dr = _arrivals(tbuf, toff, tn, tf, tz, tslot, ta_in, tb_in, tlp, tstate, t_next)
@@ -452,6 +459,14 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
                 mode, om_td, integral_m, tm, ref, tb_in[0] + z_top * om_td, om0, t_cmd,
                 rate_step, hj_top, kp, t_min, t_max, c_end, c_mean)
             om_top = 0.5 * (om_td + om_td_new)
+        elif absorb:                       # the drive's inertia turned to reflect nothing
+            om_td_new = (level - tb_in[0]) / (2.0 * z_top)     # by the step's end
+            om_top = 0.5 * (om_td + om_td_new)
+            t_bar = tb_in[0] + z_top * om_top + (om_td_new - om_td) / hj
+            if t_bar > top_hi or t_bar < top_lo:               # the motor's limits: held
+                t_bar = min(max(t_bar, top_lo), top_hi)
+                om_td_new = om_td + hj_top * (t_bar - tb_in[0] - z_top * om_td)
+                om_top = 0.5 * (om_td + om_td_new)
         ts_top = tb_in[0] + z_top * om_top
         if block:
             v_top = v_block
@@ -549,6 +564,10 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
             if mode == kn.MODE_SPEED:          # the integral term, held within the limits
                 integral = min(max(integral_m + 0.5 * h * ki * (om0 - om_td_new), t_min), t_max)
             om_td, tm, ref = om_td_new, tm_new, ref_new
+        elif absorb:
+            a_tm += h * t_bar
+            a_wm += h * t_bar * om_top
+            om_td, tm = om_td_new, t_bar
         else:                                  # the ideal source's torque is the string's
             a_tm += h * ts_top
             a_wm += h * ts_top * om0

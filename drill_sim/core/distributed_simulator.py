@@ -132,6 +132,34 @@ class StringSimulator(Simulator):
         speed = check_number("block speed", block_speed, low=None)
         self._c[dk.C_HOOK_POSITION], self._c[dk.C_V_BLOCK] = float(bool(position)), speed
 
+    def absorb_at_top(self, level: float | None, t_min: float = -math.inf,
+                      t_max: float = math.inf) -> None:
+        """The top reflecting nothing, the ideal of a top-end law that absorbs the string's
+        waves (kinematic mode): the drive's motor turns its inertia so that the top sends down
+        the torsional invariant ``level`` [C] (a = T + Z omega) whatever arrives (b), as a
+        torque source behind the top section's own impedance Z would: the top turns at
+        (level - b)/(2 Z), reached by each step's end (half a step late). The motor's torque
+        is held within [``t_min``, ``t_max``] [C]; there the top reflects. Its mean speed is
+        the caller's to hold, through ``level`` (the mean torque plus Z omega0 keeps omega0).
+        None: the speed omega0 imposed again."""
+        if level is None:
+            self._c[dk.C_TOP_ABSORB] = 0.0
+            return
+        if self.drive.mode != "kinematic":
+            raise ParameterError("absorb_at_top: expected the kinematic drive (the top's speed "
+                                 f"is its own), not {self.drive.mode!r}")
+        lo = -math.inf if t_min == -math.inf else check_number("t_min", t_min, low=None)
+        hi = math.inf if t_max == math.inf else check_number(
+            "t_max", t_max, low=None if lo == -math.inf else lo)
+        self._c[dk.C_TOP_LEVEL] = check_number("level", level, low=None)
+        self._c[dk.C_TOP_T_MIN], self._c[dk.C_TOP_T_MAX] = lo, hi
+        self._c[dk.C_TOP_ABSORB] = 1.0
+
+    @property
+    def top_impedance(self) -> float:
+        """The top section's torsional impedance Z [C t*]."""
+        return float(self.waves.torsion.z[0])
+
     @property
     def hook_position(self) -> bool:
         """The block holds the top (True) or the hook's force does (False)."""
@@ -270,9 +298,10 @@ class StringSimulator(Simulator):
     def energy(self) -> tuple[float, float]:
         """Stored energy (torsional [C], axial [F* L*]): string waves plus the BHA's kinetic
         energy (I = 1; M = 1/psi in these units) plus, with a top drive in the loop, the
-        drive's, j Omega_TD^2 / 2."""
+        drive's, j Omega_TD^2 / 2 (and with the top absorbing, ``absorb_at_top``)."""
         x = self._x
-        drive = 0.0 if self.drive.mode == "kinematic" else 0.5 * self.drive.j * x[kn.X_OMEGA_TD]**2
+        turns = self.drive.mode != "kinematic" or self._c[dk.C_TOP_ABSORB] != 0.0
+        drive = 0.5 * self.drive.j * x[kn.X_OMEGA_TD] ** 2 if turns else 0.0
         return (self._t.energy(self.dt, self.steps) + 0.5 * x[kn.X_OMEGA] ** 2 + drive,
                 self._a.energy(self.dt, self.steps) + 0.5 * x[kn.X_V] ** 2 / self.groups.psi)
 

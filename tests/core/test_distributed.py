@@ -16,7 +16,7 @@ from pipe_theory import (
     polar_moment_m4,
 )
 
-from drill_sim.core import Simulator, load_preset
+from drill_sim.core import ParameterError, Simulator, load_preset
 from drill_sim.core import distributed_kernel as dk
 from drill_sim.core import kernel as kn
 from drill_sim.core.distributed import Section, StringWaves, geometry_waves, string_waves
@@ -206,3 +206,62 @@ def test_averages_in_stationary_stick_slip():
     assert m.stick_fraction > 0.05
     assert m.mean_bit_speed == pytest.approx(1.32, rel=1e-2)
     assert m.mean_wob == pytest.approx(9.6, rel=1e-2)
+
+
+def test_a_top_that_absorbs_reflects_nothing():
+    """base's lossless pipe at rest, the bit off bottom, the top absorbing with its level
+    ramped from 0 to A over a tenth of the travel time D and held: that wave goes down, the BHA
+    (inertia 1) turns under the arriving a less Z omega, and what it reflects,
+    a - 2 Z omega, leaves through the top: no echo ever comes back down, so the BHA follows the
+    one solution of I omega' = level(t - D) - Z omega (its closed form for the ramp) to 8 D,
+    and the top turns at (level(t) - level(t - 2D))/(2 Z) plus the BHA's speed one travel time
+    earlier (at each step's middle: it answers the step's mean level; both 1e-3 of A/Z). A
+    top that reflects sends the wave back down at 3D."""
+    from pipe_theory import lossless_string
+
+    from drill_sim.core.distributed import geometry_waves
+    from drill_sim.core.parameters import RigParameters
+    p = load_preset("base")
+    g = lossless_string(p)
+    params = RigParameters(**{**p.rig.as_dict(), **g.lumped()})
+    waves = geometry_waves(params, g, H)
+    sim = StringSimulator(params.groups, waves)
+    sim.start_at_rest(gap=1e9)
+    z, d = sim.top_impedance, float(np.sum(waves.torsion.delay))
+    top_level, ramp = 0.5, 0.1 * d
+
+    def level(t):
+        return top_level * np.clip(t / ramp, 0.0, 1.0)
+
+    def bha(t):                              # omega' = level(t - D) - Z omega, from rest
+        u = np.maximum(t - d, 0.0)
+        rising = top_level / ramp * (u / z - (1.0 - np.exp(-z * u)) / z**2)
+        at_ramp = top_level / ramp * (ramp / z - (1.0 - math.exp(-z * ramp)) / z**2)
+        after = (at_ramp * np.exp(-z * (u - ramp))
+                 + top_level / z * (1.0 - np.exp(-z * (u - ramp))))
+        return np.where(u < ramp, rising, after)
+
+    n = round(8.0 * d / H)
+    t, bit, top = np.empty(n), np.empty(n), np.empty(n)
+    for k in range(n):
+        sim.absorb_at_top(float(level((k + 0.5) * H)))       # the step's mean level
+        sim.advance(1)
+        x = sim._x
+        t[k], bit[k], top[k] = x[kn.X_TAU], x[kn.X_OMEGA], x[kn.X_OMEGA_TD]
+    scale = top_level / z
+    assert np.abs(bit - bha(t)).max() < 1e-3 * scale
+    mid = t - 0.5 * H                    # the top's speed answers the step's mean level
+    expected_top = (level(mid) - level(mid - 2.0 * d)) / (2.0 * z) + bha(mid - d)
+    assert np.abs(top - expected_top).max() < 1e-3 * scale
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda sim: sim.absorb_at_top(float("nan")), "level = nan"),
+    (lambda sim: sim.absorb_at_top(0.5, 1.0, -1.0), "t_max = -1.0 is out of range"),
+])
+def test_a_bad_absorbing_top_is_refused_by_name(call, words):
+    p = load_preset("base")
+    sim = StringSimulator(p.rig.groups, geometry_waves(p.rig, p.string, H))
+    with pytest.raises(ParameterError) as info:
+        call(sim)
+    assert words in str(info.value)

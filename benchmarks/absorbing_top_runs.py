@@ -1,0 +1,107 @@
+"""The sticking points of the control map run with a top that reflects nothing (msg_docs/
+control.md, "The control map"): the top drive's motor turns its inertia, within its torque
+limits, so that the top sends down a fixed torsional invariant whatever the string sends up
+(``StringSimulator.absorb_at_top``), the ideal of a law that damps the string's waves at the
+top, with no filter, sensor or sample. A slow loop holds its mean speed (every 10 ms the level
+is the top torque low-passed over ``--tau`` seconds plus Z times the set speed and the speed
+error's integral over ``--tau``). Where even this top keeps sticking, no law acting by
+absorbing the waves at the top cures the point; the kinematic drive beside it for reference.
+Each point is run from five steady starts (``STARTS``) and the stuck fractions averaged; the
+absorbing top both ideal (no torque limit) and within the motor's limits.
+
+Run: .venv/bin/python benchmarks/absorbing_top_runs.py [--preset long]
+     [--points 40:120,40:160,55:160,70:160,100:160] [--duration 60] [--tau 10]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from drill_sim.core import kernel as kn
+from drill_sim.core import load_preset
+from drill_sim.core.rig import Rig
+
+RPM = math.pi / 30.0
+SAMPLE_S = 0.01
+PERTURBATION = 1e-3          # the steady start's bit speed, as the control map's runs
+STARTS = (1e-3, -1e-3, 3e-3, 1e-2, -1e-2)    # the perturbations averaged over: near the
+                                             # border one run's stuck fraction is noisy
+
+
+def run(preset_name: str, rpm: float, wob_kn: float, absorbing: bool, duration_s: float,
+        tau_s: float, limited: bool = True, perturbation: float = PERTURBATION
+        ) -> tuple[float, float, float, float]:
+    """(stuck fraction, SSI, mean top speed / set speed, share of the samples with the
+    absorbing top's motor at a torque limit) over the run's second half (the rig's metrics,
+    as the control map's)."""
+    preset = load_preset(preset_name)
+    drive = replace(preset.top_drive, top_drive_mode="kinematic")
+    rig = Rig(preset.rig, None, string_model="distributed", geometry=preset.string,
+              top_drive=drive)
+    rig.start_steady(rpm * RPM, preset.rig.submerged_weight_n - wob_kn * 1e3, perturbation)
+    sim = rig.sim
+    c, t_star = rig.scales.stiffness_nm_per_rad, rig.scales.time_s
+    limits = ((drive.motor_torque_min_nm / c, drive.motor_torque_max_nm / c) if limited
+              else (-math.inf, math.inf))
+    z, om0 = sim.top_impedance, rig.omega0_of(rpm * RPM)
+    torque, error = float(sim._x[kn.X_TS]), 0.0
+    if absorbing:
+        sim.absorb_at_top(torque + z * om0, *limits)
+    top, n, held = 0.0, 0, 0
+    angle = float(sim._x[kn.X_PHI_TD])
+    for k in range(1, round(duration_s / SAMPLE_S) + 1):
+        rig.advance_to(k * SAMPLE_S)
+        x = sim._x
+        speed = (x[kn.X_PHI_TD] - angle) / (SAMPLE_S / t_star)      # over the sample
+        angle = float(x[kn.X_PHI_TD])
+        if absorbing:
+            torque += SAMPLE_S / tau_s * (x[kn.X_TS] - torque)
+            error += SAMPLE_S * (om0 - speed)
+            sim.absorb_at_top(torque + z * (om0 + 2.0 * error / tau_s), *limits)
+        if k == round(0.5 * duration_s / SAMPLE_S):
+            rig.reset_metrics_window()
+        elif k * SAMPLE_S > 0.5 * duration_s:
+            top += speed
+            n += 1
+            held += not limits[0] < x[kn.X_TM] < limits[1]       # the motor at a limit
+    metrics = rig.metrics()
+    return (float(metrics["stick_fraction"]), float(metrics["ssi"]), top / n / om0,
+            held / n if absorbing else 0.0)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--preset", default="long")
+    ap.add_argument("--points", default="40:120,40:160,55:160,70:160,100:160",
+                    help="rpm:kN, comma-separated")
+    ap.add_argument("--duration", type=float, default=60.0)
+    ap.add_argument("--tau", type=float, default=10.0,
+                    help="the mean-speed loop's time constant [s]")
+    a = ap.parse_args()
+    try:
+        points = [tuple(float(v) for v in p.split(":")) for p in a.points.split(",")]
+    except ValueError:
+        ap.error(f"--points {a.points!r}: expected rpm:kN pairs, comma-separated")
+    if any(len(p) != 2 for p in points) or not 1.0 <= a.duration <= 3600.0 or a.tau <= 0.0:
+        ap.error("expected rpm:kN pairs, --duration 1 to 3600 s, --tau > 0 s")
+    print(f"preset {a.preset}, {a.duration:g} s runs, second half, mean ± sd over the "
+          f"{len(STARTS)} starts {STARTS}; the absorbing top's mean-speed loop {a.tau:g} s")
+    print("| rpm | WOB kN | kinematic: stuck | absorbing top, ideal: stuck | within the motor's "
+          "limits: stuck | its motor at a limit |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    for rpm, wob in points:
+        runs = {kind: np.array([run(a.preset, rpm, wob, kind != "kinematic", a.duration, a.tau,
+                                    kind == "limited", start) for start in STARTS])
+                for kind in ("kinematic", "ideal", "limited")}
+
+        stuck = {kind: f"{r[:, 0].mean():.2f} ± {r[:, 0].std():.2f}" for kind, r in runs.items()}
+        print(f"| {rpm:g} | {wob:g} | {stuck['kinematic']} | {stuck['ideal']} | "
+              f"{stuck['limited']} | {runs['limited'][:, 3].mean():.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
