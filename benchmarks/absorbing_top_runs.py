@@ -9,8 +9,13 @@ absorbing the waves at the top cures the point; the kinematic drive beside it fo
 Each point is run from five steady starts (``STARTS``) and the stuck fractions averaged; the
 absorbing top both ideal (no torque limit) and within the motor's limits.
 
+``--sensors PROFILE`` runs it instead as a law every 1 ms on that sensor profile's signals (b
+estimated from the measured surface torque and speed), commanding the speed of a stiff source
+and of the drive through its own speed loop.
+
 Run: .venv/bin/python benchmarks/absorbing_top_runs.py [--preset long]
      [--points 40:120,40:160,55:160,70:160,100:160] [--duration 60] [--tau 10]
+     [--sensors surface_rig]
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ import numpy as np
 from drill_sim.core import kernel as kn
 from drill_sim.core import load_preset
 from drill_sim.core.rig import Rig
+from drill_sim.core.sensors import SensorBank
 
 RPM = math.pi / 30.0
 SAMPLE_S = 0.01
@@ -73,6 +79,40 @@ def run(preset_name: str, rpm: float, wob_kn: float, absorbing: bool, duration_s
             held / n if absorbing else 0.0)
 
 
+def run_sampled(preset_name: str, rpm: float, wob_kn: float, profile: str, start: float,
+                duration_s: float, tau_s: float, through_drive: bool,
+                period_s: float = 1e-3) -> tuple[float, float]:
+    """The absorbing top as a law: every ``period_s`` it reads the sensors of ``profile``,
+    estimates the arriving invariant b = T - Z Omega from the measured surface torque and
+    top-drive speed, and commands the top's speed (level - b)/(2 Z) of a stiff speed source
+    (the kinematic drive), or of the preset's drive through its own PI speed loop
+    (``through_drive``); the level's slow loop as ``run``'s. (stuck fraction, SSI) over the
+    second half."""
+    preset = load_preset(preset_name)
+    mode = "speed" if through_drive else "kinematic"
+    rig = Rig(preset.rig, None, string_model="distributed", geometry=preset.string,
+              top_drive=replace(preset.top_drive, top_drive_mode=mode))
+    hook = preset.rig.submerged_weight_n - wob_kn * 1e3
+    rig.start_steady(rpm * RPM, hook, start)
+    z = rig.sim.top_impedance * rig.scales.stiffness_nm_per_rad * rig.scales.time_s
+    om0 = rpm * RPM
+    bank = SensorBank(profile, period_s, seed=1)
+    torque, error = rig.sample().surface_torque_nm, 0.0
+    n = round(duration_s / period_s)
+    for k in range(1, n + 1):
+        m = bank.measure(rig.time_s, rig.sample())
+        b = m.surface_torque_nm - z * m.top_drive_speed_rad_s
+        torque += period_s / tau_s * (m.surface_torque_nm - torque)
+        error += period_s * (om0 - m.top_drive_speed_rad_s)
+        level = torque + z * (om0 + 2.0 * error / tau_s)
+        rig.command(max((level - b) / (2.0 * z), 0.0), hook)
+        rig.advance_to(k * period_s)
+        if k == n // 2:
+            rig.reset_metrics_window()
+    metrics = rig.metrics()
+    return float(metrics["stick_fraction"]), float(metrics["ssi"])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--preset", default="long")
@@ -81,6 +121,9 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=60.0)
     ap.add_argument("--tau", type=float, default=10.0,
                     help="the mean-speed loop's time constant [s]")
+    ap.add_argument("--sensors", default=None, metavar="PROFILE",
+                    help="run the absorbing top as a law on this sensor profile's signals "
+                    "(every 1 ms; a stiff speed source, and the drive's own speed loop)")
     a = ap.parse_args()
     try:
         points = [tuple(float(v) for v in p.split(":")) for p in a.points.split(",")]
@@ -88,6 +131,9 @@ def main() -> None:
         ap.error(f"--points {a.points!r}: expected rpm:kN pairs, comma-separated")
     if any(len(p) != 2 for p in points) or not 1.0 <= a.duration <= 3600.0 or a.tau <= 0.0:
         ap.error("expected rpm:kN pairs, --duration 1 to 3600 s, --tau > 0 s")
+    if a.sensors is not None:
+        sampled(a, points)
+        return
     print(f"preset {a.preset}, {a.duration:g} s runs, second half, mean ± sd over the "
           f"{len(STARTS)} starts {STARTS}; the absorbing top's mean-speed loop {a.tau:g} s")
     print("| rpm | WOB kN | kinematic: stuck | absorbing top, ideal: stuck | within the motor's "
@@ -101,6 +147,23 @@ def main() -> None:
         stuck = {kind: f"{r[:, 0].mean():.2f} ± {r[:, 0].std():.2f}" for kind, r in runs.items()}
         print(f"| {rpm:g} | {wob:g} | {stuck['kinematic']} | {stuck['ideal']} | "
               f"{stuck['limited']} | {runs['limited'][:, 3].mean():.2f} |", flush=True)
+
+
+
+def sampled(a: argparse.Namespace, points: list[tuple[float, ...]]) -> None:
+    """The absorbing law on ``a.sensors``' signals, on a stiff source and through the drive."""
+    print(f"preset {a.preset}, {a.duration:g} s runs, second half, mean ± sd over the "
+          f"{len(STARTS)} starts; the absorbing top as a law every 1 ms on {a.sensors} signals")
+    print("| rpm | WOB kN | stiff speed source: SSI / stuck | through the drive's speed loop: "
+          "SSI / stuck |")
+    print("| --- | --- | --- | --- |")
+    for rpm, wob in points:
+        cells = []
+        for through in (False, True):
+            r = np.array([run_sampled(a.preset, rpm, wob, a.sensors, start, a.duration, a.tau,
+                                      through) for start in STARTS])
+            cells.append(f"{r[:, 1].mean():.2f} / {r[:, 0].mean():.2f} ± {r[:, 0].std():.2f}")
+        print(f"| {rpm:g} | {wob:g} | {cells[0]} | {cells[1]} |", flush=True)
 
 
 if __name__ == "__main__":
