@@ -365,8 +365,8 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, abuf, aoff, an, az, ac, a
         om, v = sc[SC_WS, j], sc[SC_WA, j]
         if w_static[j - 1] > 0.0:
             stuck[j - 1] = 1 if om == 0.0 and v == 0.0 else 0
-            wall_t += sc[SC_FORCE, k] * om              # the wall's torque times the speed
-            wall_a += sc[SC_FORCE + 1, k] * v               # (the balance's to the solve's 1e-11)
+            wall_t += sc[SC_FORCE, k] * om          # the wall's torque times the speed
+            wall_a += sc[SC_FORCE + 1, k] * v       # (the balance's to the solve's 1e-11)
             k += 1
         power_t += tc[j - 1] * om * om
         power_a += ac[j - 1] * v * v
