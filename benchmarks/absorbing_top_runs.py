@@ -26,8 +26,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from drill_sim.core import ParameterError, load_preset
 from drill_sim.core import kernel as kn
-from drill_sim.core import load_preset
 from drill_sim.core.rig import Rig
 from drill_sim.core.sensors import SensorBank
 
@@ -114,7 +114,8 @@ def run_sampled(preset_name: str, rpm: float, wob_kn: float, profile: str, start
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     ap.add_argument("--preset", default="long")
     ap.add_argument("--points", default="40:120,40:160,55:160,70:160,100:160",
                     help="rpm:kN, comma-separated")
@@ -125,12 +126,25 @@ def main() -> None:
                     help="run the absorbing top as a law on this sensor profile's signals "
                     "(every 1 ms; a stiff speed source, and the drive's own speed loop)")
     a = ap.parse_args()
+    points = []
+    for part in a.points.split(","):
+        try:
+            rpm, wob = (float(v) for v in part.split(":"))
+        except ValueError:
+            ap.error(f"--points: {part!r} is not a point; expected rpm:kN, e.g. 40:120, "
+                     "comma-separated")
+        if not (0.0 < rpm <= 300.0 and 0.0 < wob):
+            ap.error(f"--points: {part!r}: expected a speed above 0 and at most 300 rpm and "
+                     "a weight above 0 kN")
+        points.append((rpm, wob))
+    if not 1.0 <= a.duration <= 3600.0:
+        ap.error(f"--duration {a.duration:g}: expected 1 to 3600 s")
+    if a.tau <= 0.0:
+        ap.error(f"--tau {a.tau:g}: expected a time constant above 0 s")
     try:
-        points = [tuple(float(v) for v in p.split(":")) for p in a.points.split(",")]
-    except ValueError:
-        ap.error(f"--points {a.points!r}: expected rpm:kN pairs, comma-separated")
-    if any(len(p) != 2 for p in points) or not 1.0 <= a.duration <= 3600.0 or a.tau <= 0.0:
-        ap.error("expected rpm:kN pairs, --duration 1 to 3600 s, --tau > 0 s")
+        load_preset(a.preset)
+    except ParameterError as exc:
+        ap.error(f"--preset {a.preset}: {exc}")
     if a.sensors is not None:
         sampled(a, points)
         return

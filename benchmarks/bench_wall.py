@@ -1,8 +1,9 @@
 """What the wall's friction costs the distributed string (msg_docs/model.md, "A deviated well
 with friction along the string"): steps per second and the real-time factor with the wall and
 without it (the same well, friction 0), on base's pipe drilling in a build (mu 0.3 / 0.25, the
-preset's damping, steady start perturbed: stick-slip) and on field_a turning off bottom at
-60 rpm after its start-up (its own friction, 0.885 / 0.425), each at the model's step.
+preset's damping, steady start perturbed: stick-slip) and on field_a off bottom at 60 rpm,
+timed from the end of its 10 s ramp (its own friction, 0.885 / 0.425: it breaks loose at
+about 11 s and then sticks and slips), each at the model's step.
 
 Run: .venv/bin/python benchmarks/bench_wall.py [--seconds 30]
 """
@@ -42,8 +43,8 @@ def base_build(mu: tuple[float, float], seconds: float) -> tuple[float, float]:
 
 
 def field_a(friction: bool, seconds: float) -> tuple[float, float]:
-    """Steps per second and real-time factor of field_a turning at 60 rpm off bottom, timed
-    after the 10 s start-up."""
+    """Steps per second and real-time factor of field_a at 60 rpm off bottom, timed from the
+    end of the 10 s ramp from rest (break-off, then stick-slip with the wall)."""
     preset = load_preset("field_a")
     g = preset.string
     if not friction:
@@ -62,7 +63,8 @@ def field_a(friction: bool, seconds: float) -> tuple[float, float]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--seconds", type=float, default=30.0, help="simulated time [s]")
     args = parser.parse_args()
     if not 1.0 <= args.seconds <= 3600.0:

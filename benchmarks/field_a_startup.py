@@ -58,7 +58,8 @@ def start_up(rpm: float, seconds: float, ramp_s: float = 10.0,
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--rpm", type=float, nargs="+", default=[10, 20, 30, 60, 90])
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--dt", default="1e-4", help="model step [s], or 'default' (the "
@@ -79,6 +80,9 @@ def main() -> None:
     if not 1.0 <= args.seconds <= 3600.0:
         parser.error(f"--seconds {args.seconds:g}: expected 1 to 3600 s")
     tail_s = min(30.0, 0.5 * args.seconds)
+    if any(not 0.0 < r <= 300.0 for r in args.rpm):
+        parser.error(f"--rpm {' '.join(f'{r:g}' for r in args.rpm)}: expected set-points "
+                     "above 0 and at most 300 rpm")
     if args.static is not None and not 0.425 <= args.static <= 2.0:
         parser.error(f"--static {args.static:g}: expected 0.425 (the sliding friction) to 2")
     if not 1e-3 <= args.sample_s <= 10.0:
