@@ -27,6 +27,9 @@ from .string_geometry import StringGeometry, area_m2, polar_moment_m4
 
 STRING_MODELS = ("lumped", "distributed")
 DAMPING_STATIONS = 8        # dashpots per section when it is damped (none when undamped)
+# where the stations lie along a section, as fractions of its length: the centres of its
+# DAMPING_STATIONS equal parts (the pipe's wall forces and the BHA's are taken there)
+STATION_FRACTIONS = tuple((j + 0.5) / DAMPING_STATIONS for j in range(DAMPING_STATIONS))
 # the share of the material's damping that the low-pass on every passage carries (tau^2 =
 # share eta D); the relative dashpots carry 1 - share/2 of it, so that the two give the
 # whole at low frequency (where a standing wave's low-pass loss is half a travelling one's)
@@ -94,12 +97,11 @@ def pipe_sections(geometry: StringGeometry, torsional_damping: float = 0.0,
     bottom: ``StringGeometry.wall_forces_n_m``) and the friction coefficients."""
     well = geometry.well
     rubs = well is not None and well.rubs
-    fractions = [(j + 0.5) / DAMPING_STATIONS for j in range(DAMPING_STATIONS)]
     return tuple(Section(x.length_m, x.od_m, x.id_m, torsional_damping, axial_damping,
                          geometry.torsional_retardation_time_s,
                          geometry.axial_retardation_time_s, geometry.shear_modulus(x),
                          geometry.young_modulus(x), geometry.density(x),
-                         tuple(geometry.wall_forces_n_m(i, fractions)) if rubs else (),
+                         tuple(geometry.wall_forces_n_m(i, STATION_FRACTIONS)) if rubs else (),
                          well.friction_static if rubs else 0.0,
                          well.friction_dynamic if rubs else 0.0)
                  for i, x in enumerate(geometry.pipe()))
@@ -390,11 +392,11 @@ def bha_contact(geometry: StringGeometry) -> BhaContact | None:
     well = geometry.well
     if well is None or not well.rubs:
         return None
-    fractions = [(j + 0.5) / DAMPING_STATIONS for j in range(DAMPING_STATIONS)]
     force = moment = 0.0
     for i, part in enumerate(geometry.parts()):
         if part.bha:
-            held = sum(geometry.wall_forces_n_m(i, fractions)) * part.length_m / DAMPING_STATIONS
+            held = (sum(geometry.wall_forces_n_m(i, STATION_FRACTIONS)) * part.length_m
+                    / DAMPING_STATIONS)
             force += held
             moment += held * 0.5 * part.od_m
     if force <= 0.0:

@@ -5,6 +5,7 @@ follow (msg_docs/model.md, "Presets" and "The distributed string")."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
 from .parameters import GRAVITY_M_S2, ParameterError, check_number
@@ -191,7 +192,7 @@ class StringGeometry:
         starts, lengths, weights = zip(*below, strict=True)
         return float(sum(along_hole(well, list(starts), list(lengths), list(weights))))
 
-    def wall_forces_n_m(self, part_index: int, fractions: list[float]) -> list[float]:
+    def wall_forces_n_m(self, part_index: int, fractions: Sequence[float]) -> list[float]:
         """The soft string's wall force per unit length [N/m] at ``fractions`` of section
         ``part_index``'s length (hanging off bottom; none in a vertical hole or without a
         survey)."""
