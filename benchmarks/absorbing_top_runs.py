@@ -38,6 +38,23 @@ STARTS = (1e-3, -1e-3, 3e-3, 1e-2, -1e-2)    # the perturbations averaged over: 
                                              # border one run's stuck fraction is noisy
 
 
+class MeanSpeedLoop:
+    """The absorbing top's slow loop: its level is the top torque low-passed over ``tau_s``
+    plus Z times the set speed and 2/tau_s times the speed error's integral (any consistent
+    units: the model's or SI)."""
+
+    def __init__(self, torque: float, z: float, speed_set: float, tau_s: float,
+                 period_s: float) -> None:
+        self.torque, self.error = torque, 0.0
+        self.z, self.speed_set, self.tau_s, self.period_s = z, speed_set, tau_s, period_s
+
+    def level(self, torque: float, speed: float) -> float:
+        """The level after one period with this top torque and speed."""
+        self.torque += self.period_s / self.tau_s * (torque - self.torque)
+        self.error += self.period_s * (self.speed_set - speed)
+        return self.torque + self.z * (self.speed_set + 2.0 * self.error / self.tau_s)
+
+
 def run(preset_name: str, rpm: float, wob_kn: float, absorbing: bool, duration_s: float,
         tau_s: float, limited: bool = True, perturbation: float = PERTURBATION
         ) -> tuple[float, float, float, float]:
@@ -54,9 +71,9 @@ def run(preset_name: str, rpm: float, wob_kn: float, absorbing: bool, duration_s
     limits = ((drive.motor_torque_min_nm / c, drive.motor_torque_max_nm / c) if limited
               else (-math.inf, math.inf))
     z, om0 = sim.top_impedance, rig.omega0_of(rpm * RPM)
-    torque, error = float(sim._x[kn.X_TS]), 0.0
+    loop = MeanSpeedLoop(float(sim._x[kn.X_TS]), z, om0, tau_s, SAMPLE_S)
     if absorbing:
-        sim.absorb_at_top(torque + z * om0, *limits)
+        sim.absorb_at_top(loop.torque + z * om0, *limits)
     top, n, held = 0.0, 0, 0
     angle = float(sim._x[kn.X_PHI_TD])
     for k in range(1, round(duration_s / SAMPLE_S) + 1):
@@ -65,9 +82,7 @@ def run(preset_name: str, rpm: float, wob_kn: float, absorbing: bool, duration_s
         speed = (x[kn.X_PHI_TD] - angle) / (SAMPLE_S / t_star)      # over the sample
         angle = float(x[kn.X_PHI_TD])
         if absorbing:
-            torque += SAMPLE_S / tau_s * (x[kn.X_TS] - torque)
-            error += SAMPLE_S * (om0 - speed)
-            sim.absorb_at_top(torque + z * (om0 + 2.0 * error / tau_s), *limits)
+            sim.absorb_at_top(loop.level(x[kn.X_TS], speed), *limits)
         if k == round(0.5 * duration_s / SAMPLE_S):
             rig.reset_metrics_window()
         elif k * SAMPLE_S > 0.5 * duration_s:
@@ -86,8 +101,8 @@ def run_sampled(preset_name: str, rpm: float, wob_kn: float, profile: str, start
     estimates the arriving invariant b = T - Z Omega from the measured surface torque and
     top-drive speed, and commands the top's speed (level - b)/(2 Z) of a stiff speed source
     (the kinematic drive), or of the preset's drive through its own PI speed loop
-    (``through_drive``); the level's slow loop as ``run``'s. (stuck fraction, SSI) over the
-    second half."""
+    (``through_drive``); the level's slow loop ``MeanSpeedLoop``, as ``run``'s. (stuck
+    fraction, SSI) over the second half."""
     preset = load_preset(preset_name)
     mode = "speed" if through_drive else "kinematic"
     rig = Rig(preset.rig, None, string_model="distributed", geometry=preset.string,
@@ -97,14 +112,12 @@ def run_sampled(preset_name: str, rpm: float, wob_kn: float, profile: str, start
     z = rig.sim.top_impedance * rig.scales.stiffness_nm_per_rad * rig.scales.time_s
     om0 = rpm * RPM
     bank = SensorBank(profile, period_s, seed=1)
-    torque, error = rig.sample().surface_torque_nm, 0.0
+    loop = MeanSpeedLoop(rig.sample().surface_torque_nm, z, om0, tau_s, period_s)
     n = round(duration_s / period_s)
     for k in range(1, n + 1):
         m = bank.measure(rig.time_s, rig.sample())
         b = m.surface_torque_nm - z * m.top_drive_speed_rad_s
-        torque += period_s / tau_s * (m.surface_torque_nm - torque)
-        error += period_s * (om0 - m.top_drive_speed_rad_s)
-        level = torque + z * (om0 + 2.0 * error / tau_s)
+        level = loop.level(m.surface_torque_nm, m.top_drive_speed_rad_s)
         rig.command(max((level - b) / (2.0 * z), 0.0), hook)
         rig.advance_to(k * period_s)
         if k == n // 2:
