@@ -30,7 +30,22 @@ frequency equation (base: 0.76 and 0.57 Hz).
 On the distributed string the pipe's higher modes are there too, and these rules' filters made
 the top feed them (Re Z_top < 0 from ~1 Hz for SoftSpeed, ~1.8 Hz for Z-Torque on base):
 there the filters are then chosen for a top passive up to the fifth mode (``passive``), for
-the law's sample period. The lumped string's tunings are these rules, unchanged.
+the law's sample period. For Z-Torque that filter is chosen on exact signals and then replaces
+the noise rule's low one too: with a drive's 10 ms signals no low-pass keeps the linearised
+top passive up to f₅ (on long Re Z_top < 0 from ≈ 1.1 Hz whatever the corner), the ladder's
+closest was a 339 Hz corner that ran the motor from limit to limit, and the noise rule's
+0.47 Hz on long left the law blind to the 1.2 Hz stick-slip of 100 rpm / 160 kN (stuck 0.24
+with ``surface_rig``, 0.00 with the exact signals' 7.6 Hz). With such signals what is left of
+T_m in the pipe-torque estimate (their lags, their staircase) is fed back with the gain
+α K_p/Z, a loop whose gain grows with the low-pass's corner ω_T; so ω_T is capped at
+(α K_p/Z) ω_T = 1100 rad/s, a bound measured between two failures, not derived: on base
+(K_p 62 kN·m·s/rad) the exact signals' 29 Hz put the motor on a limit 61 % of the time and
+3.2 Hz 12 %, 2.5 Hz 1 % (five starts); on long (26 kN·m·s/rad) 4.7 Hz left 100 rpm / 160 kN
+stuck 0.05. It takes base to 2.9 Hz and long to 6.8 Hz, and leaves field_a's 9.5 Hz. And α
+comes down to 0.3: on a long string the top absorbs by swinging the drive's inertia, and α 0.5
+asked the motor for more than its 60 kN·m 7-9 % of the time where 0.3 cures the same points
+at 0-2 % (msg_docs/control.md, "The control map"). The lumped string's tunings are these
+rules, unchanged.
 """
 
 from __future__ import annotations
@@ -45,8 +60,11 @@ from .tuning import first_mode_frequency_hz, pipe_impedance, torsional_modes_hz
 COMPENSATED_FRACTION = 0.95       # J_c / J_TD of the reference SoftSpeed
 DERIVATIVE_CORNER_PER_MODE = 25.0  # SoftSpeed's derivative corner / f₁
 Z_TORQUE_ALPHA = 0.5               # the reference Z-Torque's α
+DISTRIBUTED_Z_TORQUE_ALPHA = 0.3   # its α on the distributed string (see the docstring)
 STIFFNESS_AT_MODE = 6.0           # Z-Torque: K_p / (J_TD ω₁), at least
 NOISY_TORQUE_LOWPASS_PER_MODE = 2.0   # Z-Torque's LPF_T / f₁ when the speed signal is noisy
+SIGNAL_GAINS = ("measurement_period_s", "torque_signal_tau_s", "speed_signal_tau_s")
+SIGNAL_LOOP_BANDWIDTH_RAD_S = 1100.0   # distributed, a drive's signals: (α K_p/Z) ω_T at most
 
 
 def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
@@ -61,9 +79,20 @@ def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
     if string_model != "distributed":
         return gains
     from .passive import PASSIVE_MODES, passive_gains
+    signals: dict[str, float] = {}
+    if law == "z_torque":         # the filter passive on exact signals, and a gentler α
+        signals = {k: v for k, v in gains.items() if k in SIGNAL_GAINS}
+        gains = {k: v for k, v in gains.items()
+                 if k not in SIGNAL_GAINS and k != "torque_lowpass_hz"}
+        gains["alpha"] = DISTRIBUTED_Z_TORQUE_ALPHA
     top_mode = torsional_modes_hz(preset.rig, preset.string, float(top_drive_inertia_kg_m2))
-    return passive_gains(law, sample_period_s, pipe_impedance(preset), top_drive_inertia_kg_m2,
-                         gains, top_mode[PASSIVE_MODES - 1], preset.top_drive.drive_lag_s)
+    z = pipe_impedance(preset)
+    tuned = passive_gains(law, sample_period_s, z, top_drive_inertia_kg_m2, gains,
+                          top_mode[PASSIVE_MODES - 1], preset.top_drive.drive_lag_s)
+    if signals:                   # a drive's signals: the estimate's residual loop bounded
+        cap_hz = SIGNAL_LOOP_BANDWIDTH_RAD_S * z / (tuned["alpha"] * tuned["kp_nm_s_rad"])
+        tuned["torque_lowpass_hz"] = min(tuned["torque_lowpass_hz"], cap_hz / (2.0 * math.pi))
+    return {**tuned, **signals}
 
 
 def _lumped_rule(law: str, preset: Preset, top_drive_inertia_kg_m2: float, string_model: str,
