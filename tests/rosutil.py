@@ -35,13 +35,29 @@ def wait_for(condition: Callable[[], bool], node: Node, timeout_s: float, what: 
         rclpy.spin_once(node, timeout_sec=0.01)
 
 
+# services a repeated request does no harm to: their lost response is asked for again
+REPEATABLE = ("GetParameters", "SetParameters", "SetBool", "ListParameters")
+
+
 def call_service(node: Node, srv_type, name: str, request):
-    """Call the service ``name`` once it is ready and wait for its response."""
+    """Call the service ``name`` once it is ready and wait for its response. The server's
+    middleware drops a response when the client's response reader is not matched yet (it
+    says "failed to send response (timeout)"; ros2/ros2#1253), which a loaded machine makes
+    likelier on a first call: a repeatable request is then sent again, up to three times."""
     client = node.create_client(srv_type, name)
     wait_for(client.service_is_ready, node, 10.0, f"service {name}")
-    future = client.call_async(request)
-    wait_for(future.done, node, 10.0, f"the {name} response")
-    return future.result()
+    attempts = 3 if srv_type.__name__ in REPEATABLE else 1
+    for attempt in range(1, attempts + 1):
+        future = client.call_async(request)
+        try:
+            wait_for(future.done, node, 10.0 if attempts == 1 else 5.0,
+                     f"the {name} response" + (f" (attempt {attempt})" if attempts > 1 else ""))
+            return future.result()
+        except AssertionError:
+            client.remove_pending_request(future)
+            if attempt == attempts:
+                raise
+    raise AssertionError("unreachable")
 
 
 def set_double(node: Node, target: str, name: str, value: float):

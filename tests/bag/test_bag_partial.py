@@ -89,6 +89,7 @@ def test_info_reports_a_recording_killed_between_two_chunks(tmp_path, capsys):
     assert "no summary" in capsys.readouterr().out
 
 
+@pytest.mark.offline                # its program starts no node
 def test_resim_never_claims_an_exact_match_over_a_partial_bag(tmp_path):
     bag = tmp_path / "session"
     session_bag(bag, 800)
@@ -107,6 +108,7 @@ def test_resim_never_claims_an_exact_match_over_a_partial_bag(tmp_path):
     assert done.returncode == (0 if r["matched"] else 1)
 
 
+@pytest.mark.offline                # its program starts no node
 def test_resim_of_a_repaired_crash_compares_only_the_part_kept(tmp_path):
     """A recording cut in the middle (a crash) and then repaired is sound up to the cut, but
     the session went on: resim says the part kept matches, not that it reproduced the session

@@ -20,6 +20,7 @@ from drill_sim.core.effort import EFFORT_KEYS
 POINT = ["control", "--preset", "base", "--rpm", "60", "--wob-kn", "100", "--duration", "16"]
 
 
+@pytest.mark.offline                # its program starts no node
 def test_json_is_one_object_with_a_row_per_law_as_the_loop_computes_it():
     """The installed command, as the README shows it; its z_torque row is what the offline
     loop gives for the same scenario and reference gains (computed here, in this process)."""
@@ -129,6 +130,7 @@ def test_main_job_switches_the_scenarios_controller_on_and_compares(tmp_path):
     assert "[ERROR]" not in proc.stderr, proc.stderr
 
 
+@pytest.mark.offline                # its program starts no node
 def test_the_start_perturbation_is_one_option_and_an_offline_run_writes_an_exact_bag(
         tmp_path, capsys):
     """``--perturbation`` sets the steady start's perturbation (today's 1e-3 by default; the
