@@ -11,6 +11,9 @@ markers, applied here automatically:
 - ``offline``, by hand: the programs the test starts run offline (no node, no ROS: the
   command line's simulate, stability, map, bag): unlike the other process tests, which one
   worker runs one at a time, these may run in the other worker beside them.
+- ``untimed``, by hand with the reason: the test's node exits at once or its test asserts
+  nothing that a busy machine could delay past a limit (a refusal, a build, a lookup); it
+  runs in the other worker as the offline ones do.
 
 The inner loop is ``pytest -m "not process and not slow"``."""
 
@@ -87,6 +90,8 @@ def pytest_configure(config) -> None:
     config.addinivalue_line("markers", "ros: needs rclpy")
     config.addinivalue_line("markers", "slow(reason): a long validation run, and why it is long")
     config.addinivalue_line("markers", "offline: the programs the test starts start no node")
+    config.addinivalue_line("markers", "untimed(reason): its node programs assert nothing a "
+                            "busy machine could delay, and why")
     _programs_can_be_grouped(config)
 
 
@@ -155,14 +160,17 @@ def pytest_collection_modifyitems(config, items) -> None:
             # one worker runs the programs, one at a time (they need the machine's cores and
             # their own ROS domain, as in a serial run); the other worker runs the rest, and
             # the offline programs (no node: nothing of theirs runs in real time)
-            if item.get_closest_marker("offline") is None:
+            if (item.get_closest_marker("offline") is None
+                    and item.get_closest_marker("untimed") is None):
                 item.add_marker(pytest.mark.xdist_group("programs"))
         if uses_ros or "ros" in fixtures:
             item.add_marker(pytest.mark.ros)
-        for mark in item.iter_markers("slow"):
-            if not (mark.args or mark.kwargs.get("reason")):
-                raise pytest.UsageError(f"{item.nodeid}: @pytest.mark.slow needs the reason "
-                                        "the run must be long")
+        for kind, why in (("slow", "the run must be long"),
+                          ("untimed", "nothing of it waits on the machine's speed")):
+            for mark in item.iter_markers(kind):
+                if not (mark.args or mark.kwargs.get("reason")):
+                    raise pytest.UsageError(f"{item.nodeid}: @pytest.mark.{kind} needs the "
+                                            f"reason {why}")
 
 
 @pytest.fixture(autouse=True)

@@ -28,24 +28,24 @@ string model the law will run on: lumped √(C(1/I + 1/J_TD)), or the distribute
 frequency equation (base: 0.76 and 0.57 Hz).
 
 On the distributed string the pipe's higher modes are there too, and these rules' filters made
-the top feed them (Re Z_top < 0 from ~1 Hz for SoftSpeed, ~1.8 Hz for Z-Torque on base):
-there the filters are then chosen for a top passive up to the fifth mode (``passive``), for
-the law's sample period. For Z-Torque that filter is chosen on exact signals and then replaces
-the noise rule's low one too: with a drive's 10 ms signals no low-pass keeps the linearised
-top passive up to f₅ (on long Re Z_top < 0 from ≈ 1.1 Hz whatever the corner), the ladder's
-closest was a 339 Hz corner that ran the motor from limit to limit, and the noise rule's
-0.47 Hz on long left the law blind to the 1.2 Hz stick-slip of 100 rpm / 160 kN (stuck 0.24
-with ``surface_rig``, 0.00 with the exact signals' 7.6 Hz). With such signals what is left of
-T_m in the pipe-torque estimate (their lags, their staircase) is fed back with the gain
-α K_p/Z, a loop whose gain grows with the low-pass's corner ω_T; so ω_T is capped at
-(α K_p/Z) ω_T = 1100 rad/s, a bound measured between two failures, not derived: on base
-(K_p 62 kN·m·s/rad) the exact signals' 29 Hz put the motor on a limit 61 % of the time and
-3.2 Hz 12 %, 2.5 Hz 1 % (five starts); on long (26 kN·m·s/rad) 4.7 Hz left 100 rpm / 160 kN
-stuck 0.05. It takes base to 2.9 Hz and long to 6.8 Hz, and leaves field_a's 9.5 Hz. And α
-comes down to 0.3: on a long string the top absorbs by swinging the drive's inertia, and α 0.5
-asked the motor for more than its 60 kN·m 7-9 % of the time where 0.3 cures the same points
-at 0-2 % (msg_docs/control.md, "The control map"). The lumped string's tunings are these
-rules, unchanged.
+the top feed them (Re Z_top < 0 from ~1 Hz for SoftSpeed, ~1.8 Hz for Z-Torque on base): there
+the filters are then chosen for a top passive up to the fifth mode (``passive``), for the law's
+sample period. For Z-Torque that filter is chosen on exact signals and then replaces the noise
+rule's low one too: with a drive's 10 ms signals no low-pass keeps the linearised top passive
+up to f₅ (on long Re Z_top < 0 from ≈ 1.1 Hz whatever the corner), the ladder's closest was a
+339 Hz corner that ran the motor from limit to limit, and the noise rule's 0.47 Hz on long left
+the law blind to the 1.2 Hz stick-slip of 100 rpm / 160 kN (stuck 0.24 with ``surface_rig``,
+0.00 with the exact signals' 7.6 Hz). With such signals (or a noisy speed) what is left of T_m
+in the pipe-torque estimate (their lags, their staircase, the noise) is fed back with the gain
+α K_p/Z, a loop whose gain grows with the low-pass's corner ω_T; so ω_T is capped at (α K_p/Z)
+ω_T = 1100 rad/s, a bound measured between two failures, not derived: on base (K_p 62
+kN·m·s/rad) the exact signals' 29 Hz put the motor on a limit 61 % of the time and 3.2 Hz 12 %,
+2.5 Hz 1 % (five starts); on long (26 kN·m·s/rad) 4.7 Hz left 100 rpm / 160 kN stuck 0.05. It
+takes base to 2.9 Hz and long to 6.8 Hz, and leaves field_a's 9.5 Hz. And α comes down to 0.3:
+on a long string the top absorbs by swinging the drive's inertia, and α 0.5 asked the motor for
+more than its 60 kN·m 7-9 % of the time where 0.3 cures the same points at 0-2 %
+(msg_docs/control.md, "The control map"). The lumped string's tunings are these rules,
+unchanged.
 """
 
 from __future__ import annotations
@@ -80,6 +80,7 @@ def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
         return gains
     from .passive import PASSIVE_MODES, passive_gains
     signals: dict[str, float] = {}
+    noisy = "torque_lowpass_hz" in gains          # the noise rule fired: a noisy speed
     if law == "z_torque":         # the filter passive on exact signals, and a gentler α
         signals = {k: v for k, v in gains.items() if k in SIGNAL_GAINS}
         gains = {k: v for k, v in gains.items()
@@ -89,7 +90,7 @@ def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
     z = pipe_impedance(preset)
     tuned = passive_gains(law, sample_period_s, z, top_drive_inertia_kg_m2, gains,
                           top_mode[PASSIVE_MODES - 1], preset.top_drive.drive_lag_s)
-    if signals:                   # a drive's signals: the estimate's residual loop bounded
+    if signals or noisy:          # a drive's signals: the estimate's residual loop bounded
         cap_hz = SIGNAL_LOOP_BANDWIDTH_RAD_S * z / (tuned["alpha"] * tuned["kp_nm_s_rad"])
         tuned["torque_lowpass_hz"] = min(tuned["torque_lowpass_hz"], cap_hz / (2.0 * math.pi))
     return {**tuned, **signals}

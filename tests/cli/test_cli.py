@@ -130,6 +130,7 @@ def test_main_job_runs_the_node_playing_its_scenario_and_writes_summary_and_plot
     assert r["exact"] and r["mode"] == "real-time" and r["commands"] == 3
 
 
+@pytest.mark.untimed("a refusal: the main job ends at once")
 def test_main_job_bad_arguments(tmp_path):
     proc = run("run", "--scenario", "nowhere", check=False)
     assert proc.returncode == 2 and "scenario" in proc.stderr and "Traceback" not in proc.stderr
@@ -173,6 +174,7 @@ def test_main_job_refuses_to_mix_with_a_rig_already_running(tmp_path):
     assert code == 1 and "another rig publishes on /drill_sim/joint_states (" in err, err
 
 
+@pytest.mark.untimed("a refusal: the main job ends at once")
 @pytest.mark.parametrize("param, fragment", [
     ("initial_state:=sideways", "initial_state = 'sideways'"),
     ("record_split_size_bytes:=1", "1 MiB at least"),

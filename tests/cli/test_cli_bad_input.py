@@ -17,6 +17,8 @@ from drill_sim.cli.checks import finite_or_none, join_negative_values, json_line
 from drill_sim.core import ParameterError, load_preset
 from drill_sim.session.scenario import load_scenario
 
+UNTIMED = pytest.mark.untimed("a refusal: the program ends at once, within a 120 s timeout")
+
 MEMORY_CAP = 3 << 30       # bytes of address space per command: a regression fails, not the host
 GROUPS = "n=4,psi=13.73,lambda=6.84,beta=0.36"
 
@@ -141,10 +143,10 @@ CASES = [
 
 def _case(program: str, args: list[str], fragments: list[str]):
     """A case as a parameter: named by its command line; marked offline where it starts no
-    node (the command line's simulate and stability)."""
+    node (the command line's simulate and stability), else untimed (its node is refused)."""
     offline = program == "drill_sim" and args[0] in ("simulate", "stability")
     return pytest.param(program, args, fragments, id=f"{program} {' '.join(args)}",
-                        marks=[pytest.mark.offline] if offline else [])
+                        marks=[pytest.mark.offline if offline else UNTIMED])
 
 
 @pytest.mark.parametrize("program, args, fragments", [_case(*case) for case in CASES])

@@ -74,3 +74,29 @@ def test_the_alignment_reads_each_property_of_the_signals():
     channels["top_drive_speed_rad_s"] = ChannelSpec(noise_std=0.5)
     channels["motor_torque_nm"] = ChannelSpec()
     assert signal_alignment(profile, 0.7) == {"torque_lowpass_hz": 1.4}
+
+
+def test_on_the_distributed_string_z_torque_is_capped_for_a_drives_signals():
+    """control.md, "Tuning for the node's rates": on the distributed string Z-Torque's α is 0.3
+    and its torque low-pass is the exact signals' passive one, capped for sampled or noisy
+    signals at (α K_p/Z) ω_T = 1100 rad/s; computed here from K_p and Z. The noise rule's
+    2 f₁ is not used there."""
+    for name in ("base", "long"):
+        preset = load_preset(name)
+        z, exact = pipe_impedance(preset), reference_gains(
+            "z_torque", preset, J, string_model="distributed")
+        assert exact["alpha"] == 0.3
+        cap_hz = 1100.0 * z / (0.3 * exact["kp_nm_s_rad"]) / (2.0 * math.pi)
+        ideal = load_profile("ideal")
+        noisy = dataclasses.replace(ideal, channels={
+            **ideal.channels, "top_drive_speed_rad_s": ChannelSpec(noise_std=0.005)})
+        for profile in ("surface_rig", noisy):
+            gains = reference_gains("z_torque", preset, J, string_model="distributed",
+                                    sensor_profile=profile)
+            assert gains["torque_lowpass_hz"] == pytest.approx(
+                min(exact["torque_lowpass_hz"], cap_hz), rel=1e-12)
+    # base: the cap binds (29 Hz exact, 2.9 Hz capped); long: 7.6 Hz exact, 6.8 Hz capped
+    base = load_preset("base")
+    assert reference_gains("z_torque", base, J, string_model="distributed",
+                           sensor_profile="surface_rig")["torque_lowpass_hz"] == pytest.approx(
+        2.85, abs=0.01)

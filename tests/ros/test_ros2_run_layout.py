@@ -9,12 +9,14 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 from conftest import installed
 from rosutil import isolate
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
+@pytest.mark.untimed("a build and a lookup: the node need only say it is ready, within 60 s")
 def test_colcon_build_and_ros2_run_lookup(tmp_path):
     src = tmp_path / "src" / "drill_sim"
     shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(
