@@ -9,6 +9,7 @@ Run: .venv/bin/python benchmarks/absorbing_top.py
 
 from __future__ import annotations
 
+import argparse
 import math
 
 import numpy as np
@@ -20,7 +21,8 @@ from drill_sim.core.stability import steady_state
 from drill_sim.core.stability_distributed import _newton_from_grid, characteristic
 
 POINTS = [("long", 40, 120), ("long", 40, 160), ("long", 55, 160), ("long", 70, 160),
-          ("long", 100, 160), ("field_a", 40, 160), ("field_a", 55, 160), ("field_a", 70, 160)]
+          ("long", 100, 160), ("field_a", 40, 160), ("field_a", 55, 160), ("field_a", 70, 160),
+          ("field_a", 40, 250)]
 BOX = (-0.5, 5.0, -20.0, 20.0)
 
 
@@ -43,6 +45,7 @@ def rightmost(preset_name: str, rpm: float, wob_kn: float, absorbing: bool) -> c
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
     print("preset | rpm | WOB [kN] | top held: rightmost s [1/t*] (Hz) | non-reflecting top")
     for name, rpm, wob in POINTS:
         hz = 1.0 / (2.0 * math.pi * load_preset(name).rig.scales.time_s)

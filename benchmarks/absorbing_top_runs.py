@@ -1,7 +1,7 @@
-"""The sticking points of the control map run with a top that reflects nothing (msg_docs/
-control.md, "The control map"): the top drive's motor turns its inertia, within its torque
-limits, so that the top sends down a fixed torsional invariant whatever the string sends up
-(``StringSimulator.absorb_at_top``), the ideal of a law that damps the string's waves at the
+"""The sticking points of the control map run with a top that reflects nothing
+(msg_docs/control.md, "The control map"): the top drive's motor turns its inertia, within its
+torque limits, so that the top sends down a fixed torsional invariant whatever the string sends
+up (``StringSimulator.absorb_at_top``), the ideal of a law that damps the string's waves at the
 top, with no filter, sensor or sample. A slow loop holds its mean speed (every 10 ms the level
 is the top torque low-passed over ``--tau`` seconds plus Z times the set speed and the speed
 error's integral over ``--tau``). Where even this top keeps sticking, no law acting by

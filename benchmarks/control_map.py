@@ -13,7 +13,8 @@ from ``--starts`` steady starts (the perturbations of absorbing_top_runs.py) and
 >= 20 % of the time; it is "cured" where Z-Torque there sticks <= 1 %, saturates < 5 % and its
 SSI is at most 0.75 of the kinematic's (all means over the starts); it is "not curable" where
 even the top that reflects nothing, within the drive's motor limits (absorbing_top_runs.py),
-sticks over 1 % there.
+sticks over 1 % there (a crude top: a cure outranks it); "-": the kinematic drive stuck under
+20 %, not scored.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from absorbing_top_runs import run as absorbing_run
 from drill_sim.control.closed_loop import run_loop
 from drill_sim.control.evaluation import LoopSettings
 from drill_sim.control.reference import reference_gains
-from drill_sim.core import load_preset
+from drill_sim.core import ParameterError, load_preset
 from drill_sim.session.scenario import Scenario
 
 STICKS, CURED_STICK, CURED_SATURATION, CURED_SSI_RATIO = 0.20, 0.01, 0.05, 0.75
@@ -60,32 +61,46 @@ def absorbed(job: tuple[str, float, float, float, float]) -> float:
 
 
 def verdict(kin: tuple, zt: tuple, absorbing_stuck: float | None) -> str:
-    """'-' no stick-slip to cure; 'not curable' where the absorbing top within the motor's
-    limits sticks over the bar too; else 'cured' or 'not cured'."""
+    """'-' the kinematic drive stuck under 20 % (not scored); 'cured' where Z-Torque meets the
+    bars; else 'not curable' where the absorbing top within the motor's limits sticks over the
+    bar too (a crude top, so a cure outranks it), or 'not cured'."""
     if kin[5] < STICKS:
         return "-"
+    if (zt[5] <= CURED_STICK and zt[6] < CURED_SATURATION
+            and zt[4] <= CURED_SSI_RATIO * kin[4]):
+        return "cured"
     if absorbing_stuck is not None and absorbing_stuck > CURED_STICK:
         return "not curable"
-    ok = (zt[5] <= CURED_STICK and zt[6] < CURED_SATURATION
-          and zt[4] <= CURED_SSI_RATIO * kin[4])
-    return "cured" if ok else "not cured"
+    return "not cured"
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--preset", default="long")
-    ap.add_argument("--rpm", default="40,55,70,100")
-    ap.add_argument("--wob-kn", default="80,100,120,160")
-    ap.add_argument("--duration", type=float, default=60.0)
-    ap.add_argument("--workers", type=int, default=2)
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    ap.add_argument("--preset", default="long", help="a shipped preset or a preset YAML file")
+    ap.add_argument("--rpm", default="40,55,70,100",
+                    help="top-drive speeds [rpm], comma-separated, each above 0 and at most 300")
+    ap.add_argument("--wob-kn", default="80,100,120,160",
+                    help="available weights on bit W0 [kN], comma-separated, each above 0")
+    ap.add_argument("--duration", type=float, default=60.0,
+                    help="each run [s], 2 to 3600; the metrics over its second half")
+    ap.add_argument("--workers", type=int, default=2, help="processes, at least 1")
     ap.add_argument("--starts", type=int, default=len(STARTS),
                     help=f"steady starts averaged per point, 1 to {len(STARTS)}")
-    ap.add_argument("--plot", default=None)
+    ap.add_argument("--plot", default=None,
+                    help="a PNG of the map: each point's verdict for each sensor set")
     a = ap.parse_args()
-    rpms = [float(x) for x in a.rpm.split(",")]
-    wobs = [float(x) for x in a.wob_kn.split(",")]
+    rpms, wobs = _values(ap, "--rpm", a.rpm, 300.0), _values(ap, "--wob-kn", a.wob_kn, None)
     if not 1 <= a.starts <= len(STARTS):
         ap.error(f"--starts {a.starts}: expected 1 to {len(STARTS)}")
+    if not 2.0 <= a.duration <= 3600.0:
+        ap.error(f"--duration {a.duration:g}: expected 2 to 3600 s")
+    if a.workers < 1:
+        ap.error(f"--workers {a.workers}: expected at least 1")
+    try:
+        load_preset(a.preset)
+    except ParameterError as exc:
+        ap.error(f"--preset {a.preset}: {exc}")
     starts = STARTS[:a.starts]
     # the kinematic drive reads no sensor: one set of its runs serves both profiles
     keys = [(r, w, p, law) for r, w in itertools.product(rpms, wobs)
@@ -126,6 +141,20 @@ def main() -> int:
     return 0
 
 
+def _values(ap: argparse.ArgumentParser, name: str, text: str,
+            top: float | None) -> list[float]:
+    """The comma-separated numbers of option ``name``, each above 0 (and at most ``top``)."""
+    try:
+        values = [float(x) for x in text.split(",")]
+    except ValueError:
+        ap.error(f"{name} {text}: expected comma-separated numbers")
+    bad = [v for v in values if not (v > 0.0 and (top is None or v <= top))]
+    if bad:
+        bound = f" and at most {top:g}" if top is not None else ""
+        ap.error(f"{name} {text}: {bad[0]:g} is out of range: each must be above 0{bound}")
+    return values
+
+
 def _plot(a, rpms, wobs, results, absorbing) -> None:
     import matplotlib
     matplotlib.use("Agg")
@@ -145,7 +174,7 @@ def _plot(a, rpms, wobs, results, absorbing) -> None:
         ax.set_xlabel("top-drive speed [rpm]")
     axes[0].set_ylabel("available weight on bit W0 [kN]")
     fig.suptitle("stuck fraction, kinematic → Z-Torque: ■ cured, × not cured, ▲ not curable "
-                 "from the top (this drive), ● no stick-slip", fontsize=10)
+                 "from the top (this drive), ● kinematic stuck < 20 % (not scored)", fontsize=9)
     fig.tight_layout()
     fig.savefig(a.plot, dpi=110)
 
