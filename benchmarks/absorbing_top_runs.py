@@ -26,6 +26,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from drill_sim.cli.checks import Number, in_range
+from drill_sim.cli.errors import UsageError
 from drill_sim.core import ParameterError, load_preset
 from drill_sim.core import kernel as kn
 from drill_sim.core.rig import Rig
@@ -142,14 +144,17 @@ def main() -> None:
     points = []
     for part in a.points.split(","):
         try:
-            rpm, wob = (float(v) for v in part.split(":"))
+            rpm, wob = (Number(v.strip()) for v in part.split(":"))
         except ValueError:
             ap.error(f"--points: {part!r} is not a point; expected rpm:kN, e.g. 40:120, "
                      "comma-separated")
-        if not (0.0 < rpm <= 300.0 and 0.0 < wob):
-            ap.error(f"--points: {part!r}: expected a speed above 0 and at most 300 rpm and "
-                     "a weight above 0 kN")
-        points.append((rpm, wob))
+        try:                             # as drill_sim control checks its --rpm and --wob-kn
+            points.append((in_range(f"--points {part}: speed", rpm, 0.0, 300.0, unit="rpm",
+                                    low_open=True),
+                           in_range(f"--points {part}: weight", wob, 0.0, 1e4, unit="kN",
+                                    low_open=True)))
+        except UsageError as exc:
+            ap.error(str(exc))
     if not 1.0 <= a.duration <= 3600.0:
         ap.error(f"--duration {a.duration:g}: expected 1 to 3600 s")
     if a.tau <= 0.0:

@@ -29,6 +29,8 @@ import numpy as np
 from absorbing_top_runs import STARTS
 from absorbing_top_runs import run as absorbing_run
 
+from drill_sim.cli.checks import Number, in_range
+from drill_sim.cli.errors import UsageError
 from drill_sim.control.closed_loop import run_loop
 from drill_sim.control.evaluation import LoopSettings
 from drill_sim.control.reference import reference_gains
@@ -36,6 +38,7 @@ from drill_sim.core import ParameterError, load_preset
 from drill_sim.session.scenario import Scenario
 
 STICKS, CURED_STICK, CURED_SATURATION, CURED_SSI_RATIO = 0.20, 0.01, 0.05, 0.75
+WOB_MAX_KN = 1e4             # as drill_sim control's --wob-kn
 ABSORBING_TAU_S = 10.0       # the absorbing top's mean-speed loop, as absorbing_top_runs.py's
 
 
@@ -81,7 +84,8 @@ def main() -> int:
     ap.add_argument("--rpm", default="40,55,70,100",
                     help="top-drive speeds [rpm], comma-separated, each above 0 and at most 300")
     ap.add_argument("--wob-kn", default="80,100,120,160",
-                    help="available weights on bit W0 [kN], comma-separated, each above 0")
+                    help="available weights on bit W0 [kN], comma-separated, each above 0 "
+                    f"and at most {WOB_MAX_KN:g}")
     ap.add_argument("--duration", type=float, default=60.0,
                     help="each run [s], 2 to 3600; the metrics over its second half")
     ap.add_argument("--workers", type=int, default=2, help="processes, at least 1")
@@ -90,7 +94,8 @@ def main() -> int:
     ap.add_argument("--plot", default=None,
                     help="a PNG of the map: each point's verdict for each sensor set")
     a = ap.parse_args()
-    rpms, wobs = _values(ap, "--rpm", a.rpm, 300.0), _values(ap, "--wob-kn", a.wob_kn, None)
+    rpms = _values(ap, "--rpm", a.rpm, 300.0, "rpm")
+    wobs = _values(ap, "--wob-kn", a.wob_kn, WOB_MAX_KN, "kN")
     if not 1 <= a.starts <= len(STARTS):
         ap.error(f"--starts {a.starts}: expected 1 to {len(STARTS)}")
     if not 2.0 <= a.duration <= 3600.0:
@@ -141,18 +146,17 @@ def main() -> int:
     return 0
 
 
-def _values(ap: argparse.ArgumentParser, name: str, text: str,
-            top: float | None) -> list[float]:
-    """The comma-separated numbers of option ``name``, each above 0 (and at most ``top``)."""
+def _values(ap: argparse.ArgumentParser, name: str, text: str, top: float,
+            unit: str) -> list[float]:
+    """The comma-separated numbers of option ``name``, each above 0 and at most ``top``
+    (``checks.in_range``, as ``drill_sim control`` checks one)."""
     try:
-        values = [float(x) for x in text.split(",")]
+        return [in_range(name, Number(x.strip()), 0.0, top, unit=unit, low_open=True)
+                for x in text.split(",")]
     except ValueError:
         ap.error(f"{name} {text}: expected comma-separated numbers")
-    bad = [v for v in values if not (v > 0.0 and (top is None or v <= top))]
-    if bad:
-        bound = f" and at most {top:g}" if top is not None else ""
-        ap.error(f"{name} {text}: {bad[0]:g} is out of range: each must be above 0{bound}")
-    return values
+    except UsageError as exc:
+        ap.error(str(exc))
 
 
 def _plot(a, rpms, wobs, results, absorbing) -> None:

@@ -80,8 +80,9 @@ def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
         return gains
     from .passive import PASSIVE_MODES, passive_gains
     signals: dict[str, float] = {}
-    noisy = "torque_lowpass_hz" in gains          # the noise rule fired: a noisy speed
+    noisy = False
     if law == "z_torque":         # the filter passive on exact signals, and a gentler α
+        noisy = "torque_lowpass_hz" in gains      # the noise rule fired: a noisy speed
         signals = {k: v for k, v in gains.items() if k in SIGNAL_GAINS}
         gains = {k: v for k, v in gains.items()
                  if k not in SIGNAL_GAINS and k != "torque_lowpass_hz"}
