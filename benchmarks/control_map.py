@@ -3,7 +3,8 @@ Z-Torque's reference tuning (passive up to the fifth mode), over speed and weigh
 and ``surface_rig`` sensors (msg_docs/control.md, "The control map").
 
     python benchmarks/control_map.py [--preset long] [--rpm 40,55,70,100] \\
-        [--wob-kn 80,100,120,160] [--duration 60] [--starts 5] [--workers 2] [--plot map.png]
+        [--wob-kn 80,100,120,160] [--duration 60] [--starts 5] [--workers 2] [--plot map.png] \\
+        [--gain alpha=0.2 ...]
 
 Each point is ``drill_sim control --rpm R --wob-kn W --string-model distributed`` for the
 kinematic drive and Z-Torque (the offline loop, 1 ms sample, metrics over the second half), run
@@ -14,7 +15,8 @@ from ``--starts`` steady starts (the perturbations of absorbing_top_runs.py) and
 SSI is at most 0.75 of the kinematic's (all means over the starts); it is "not curable" where
 even the top that reflects nothing, within the drive's motor limits (absorbing_top_runs.py),
 sticks over 1 % there (a crude top: a cure outranks it); "-": the kinematic drive stuck under
-20 %, not scored.
+20 %, not scored. ``--gain NAME=VALUE`` overrides one of Z-Torque's reference gains (a tuning
+to compare, e.g. field_a's α 0.2 in control.md).
 """
 
 from __future__ import annotations
@@ -31,9 +33,12 @@ from absorbing_top_runs import run as absorbing_run
 
 from drill_sim.cli.checks import Number, in_range
 from drill_sim.cli.errors import UsageError
+from drill_sim.control import make_law
 from drill_sim.control.closed_loop import run_loop
 from drill_sim.control.evaluation import LoopSettings
 from drill_sim.control.reference import reference_gains
+from drill_sim.control.tuning import pipe_impedance
+from drill_sim.control.z_torque import ZTorque
 from drill_sim.core import ParameterError, load_preset
 from drill_sim.session.scenario import Scenario
 
@@ -42,12 +47,21 @@ WOB_MAX_KN = 1e4             # as drill_sim control's --wob-kn
 ABSORBING_TAU_S = 10.0       # the absorbing top's mean-speed loop, as absorbing_top_runs.py's
 
 
-def one(job: tuple[str, float, float, str, str, float, float]) -> tuple:
-    """(ssi, stick, saturation) of one run."""
-    preset_name, rpm, wob, profile, law, duration, perturbation = job
+def gains_of(preset_name: str, law: str, profile: str,
+             overrides: dict[str, float]) -> dict[str, float]:
+    """The reference gains of ``law`` on the preset's distributed string for ``profile``'s
+    signals, with ``overrides`` (``--gain``) for Z-Torque."""
     preset = load_preset(preset_name)
     gains = reference_gains(law, preset, preset.top_drive.top_drive_inertia_kg_m2,
                             string_model="distributed", sensor_profile=profile)
+    return {**gains, **overrides} if law == "z_torque" else gains
+
+
+def one(job: tuple[str, float, float, str, str, float, float, dict[str, float]]) -> tuple:
+    """(ssi, stick, saturation) of one run."""
+    preset_name, rpm, wob, profile, law, duration, perturbation, overrides = job
+    preset = load_preset(preset_name)
+    gains = gains_of(preset_name, law, profile, overrides)
     settings = LoopSettings(law=law, gains=gains, string_model="distributed",
                             sensor_profile=profile, perturbation=perturbation)
     r = run_loop(preset, Scenario.steady(rpm, wob, duration_s=duration,
@@ -93,6 +107,9 @@ def main() -> int:
                     help=f"steady starts averaged per point, 1 to {len(STARTS)}")
     ap.add_argument("--plot", default=None,
                     help="a PNG of the map: each point's verdict for each sensor set")
+    ap.add_argument("--gain", action="append", default=[], metavar="NAME=VALUE",
+                    help="override one of Z-Torque's reference gains, e.g. alpha=0.2 "
+                    "(repeatable; units as in msg_docs/control.md)")
     a = ap.parse_args()
     rpms = _values(ap, "--rpm", a.rpm, 300.0, "rpm")
     wobs = _values(ap, "--wob-kn", a.wob_kn, WOB_MAX_KN, "kN")
@@ -106,12 +123,13 @@ def main() -> int:
         load_preset(a.preset)
     except ParameterError as exc:
         ap.error(f"--preset {a.preset}: {exc}")
+    overrides = _overrides(ap, a.gain, a.preset)
     starts = STARTS[:a.starts]
     # the kinematic drive reads no sensor: one set of its runs serves both profiles
     keys = [(r, w, p, law) for r, w in itertools.product(rpms, wobs)
             for p, law in (("ideal", "kinematic"), ("ideal", "z_torque"),
                            ("surface_rig", "z_torque"))]
-    jobs = [(a.preset, *key, a.duration, start) for key in keys for start in starts]
+    jobs = [(a.preset, *key, a.duration, start, overrides) for key in keys for start in starts]
     begin, runs = time.monotonic(), []
     with ProcessPoolExecutor(a.workers) as pool:
         for k, res in enumerate(pool.map(one, jobs), 1):
@@ -131,7 +149,8 @@ def main() -> int:
     absorbing = {point: float(np.mean(stuck[i * n:(i + 1) * n]))
                  for i, point in enumerate(sticking)}
     print(f"preset {a.preset}, distributed string, {a.duration:g} s runs, metrics over the "
-          f"second half, means over {n} starts; kinematic drive -> Z-Torque (reference tuning)")
+          f"second half, means over {n} starts; kinematic drive -> Z-Torque (reference tuning"
+          + "".join(f", {k} {v:g}" for k, v in overrides.items()) + ")")
     print("| rpm | WOB kN | sensors | kinematic SSI / stick | absorbing top within the "
           "motor's limits: stick | Z-Torque SSI / stick / sat | verdict |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
@@ -157,6 +176,31 @@ def _values(ap: argparse.ArgumentParser, name: str, text: str, top: float,
         ap.error(f"{name} {text}: expected comma-separated numbers")
     except UsageError as exc:
         ap.error(str(exc))
+
+
+def _overrides(ap: argparse.ArgumentParser, items: list[str],
+               preset_name: str) -> dict[str, float]:
+    """``--gain`` NAME=VALUE items as Z-Torque gains, each checked by building the law with
+    them (its constructor names a bad value and the range it expects)."""
+    out: dict[str, float] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or name not in ZTorque.GAINS:
+            ap.error(f"--gain {item!r}: expected NAME=VALUE with NAME one of Z-Torque's gains "
+                     f"({', '.join(ZTorque.GAINS)})")
+        try:
+            out[name] = float(Number(value.strip()))
+        except ValueError:
+            ap.error(f"--gain {item!r}: {value!r} is not a number")
+    preset = load_preset(preset_name)
+    for profile in ("ideal", "surface_rig"):
+        try:
+            make_law("z_torque", 1e-3, pipe_impedance(preset),
+                     preset.top_drive.top_drive_inertia_kg_m2,
+                     **gains_of(preset_name, "z_torque", profile, out))
+        except ParameterError as exc:
+            ap.error(f"--gain: {exc}")
+    return out
 
 
 def _plot(a, rpms, wobs, results, absorbing) -> None:
