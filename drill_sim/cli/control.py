@@ -27,7 +27,7 @@ from ..control.evaluation import (
 )
 from ..control.reference import reference_gains
 from ..control.scenarios import SETS, named
-from ..core import load_preset
+from ..core import NoSteadyDrilling, load_preset
 from ..core.distributed import STRING_MODELS
 from ..session.parameter_table import PERTURBATION_RANGE
 from ..terminal import Progress
@@ -209,8 +209,15 @@ def run(args: argparse.Namespace) -> int:
                 else:
                     bag = (None if args.record is None
                            else args.record / f"{scenario.name}-{one.law}")
-                    results.append(run_loop(preset, scenario, one, progress=report,
-                                            record=bag))
+                    try:
+                        results.append(run_loop(preset, scenario, one, progress=report,
+                                                record=bag))
+                    except NoSteadyDrilling as exc:     # the steady start: not a bug
+                        rig = preset.rig
+                        least_kn = rig.groups.lam * rig.scales.force_n / 1e3
+                        raise UsageError(f"scenario {scenario.name}, its steady start: {exc}; "
+                                         f"expected a weight on bit above {least_kn:.4g} kN "
+                                         "on this preset") from None
     finally:
         progress.close()
     document = _document(args, preset.name, drive, h, results, settings)

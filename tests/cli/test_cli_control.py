@@ -75,6 +75,23 @@ def test_bad_options_are_one_line(argv, words, capsys):
     assert words in err
 
 
+def test_a_weight_the_bit_cannot_drill_at_is_one_line_naming_the_least(capsys):
+    """Below λ (the wear flats' friction, in SI λ F*) there is no steady drilling to start
+    from: one line that names the scenario and the least weight, not a traceback; just above
+    it the run goes."""
+    from drill_sim.core import load_preset
+    rig = load_preset("base").rig
+    least_kn = rig.groups.lam * rig.scales.force_n / 1e3
+    below = ["control", "--preset", "base", "--rpm", "60", "--laws", "kinematic",
+             "--duration", "2", "--wob-kn"]
+    assert main([*below, f"{0.99 * least_kn:.6g}"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "its steady start: no steady drilling" in err
+    assert f"above {least_kn:.4g} kN" in err
+    assert main([*below, f"{1.01 * least_kn:.6g}", "--json"]) == 0
+
+
 def test_rpm_without_wob_is_refused(capsys):
     assert main(["control", "--rpm", "60"]) == 2
     assert "--wob-kn" in capsys.readouterr().err
