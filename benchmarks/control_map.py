@@ -33,11 +33,9 @@ from absorbing_top_runs import run as absorbing_run
 
 from drill_sim.cli.checks import Number, in_range
 from drill_sim.cli.errors import UsageError
-from drill_sim.control import make_law
 from drill_sim.control.closed_loop import run_loop
-from drill_sim.control.evaluation import LoopSettings
+from drill_sim.control.evaluation import LoopSettings, build_law, law_top_drive
 from drill_sim.control.reference import reference_gains
-from drill_sim.control.tuning import pipe_impedance
 from drill_sim.control.z_torque import ZTorque
 from drill_sim.core import ParameterError, load_preset
 from drill_sim.session.scenario import Scenario
@@ -91,6 +89,14 @@ def verdict(kin: tuple, zt: tuple, absorbing_stuck: float | None) -> str:
     return "not cured"
 
 
+def why_not(kin: tuple, zt: tuple) -> str:
+    """The bars Z-Torque missed, for a 'not cured' row."""
+    missed = [what for what, bad in (("stuck", zt[5] > CURED_STICK),
+                                     ("saturated", zt[6] >= CURED_SATURATION),
+                                     ("SSI", zt[4] > CURED_SSI_RATIO * kin[4])) if bad]
+    return f" ({', '.join(missed)})" if missed else ""
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.ArgumentDefaultsHelpFormatter)
@@ -134,7 +140,8 @@ def main() -> int:
     with ProcessPoolExecutor(a.workers) as pool:
         for k, res in enumerate(pool.map(one, jobs), 1):
             runs.append(res)
-            print(f"\r{k}/{len(jobs)} runs", end="", file=sys.stderr, flush=True)
+            if sys.stderr.isatty():
+                print(f"\r{k}/{len(jobs)} runs", end="", file=sys.stderr, flush=True)
     print(f"\r{len(jobs)} runs in {time.monotonic() - begin:.0f} s", file=sys.stderr)
     n = len(starts)
     results = {key: (*key, *np.mean(runs[i * n:(i + 1) * n], axis=0))
@@ -148,9 +155,10 @@ def main() -> int:
                                          for r, w in sticking for start in starts]))
     absorbing = {point: float(np.mean(stuck[i * n:(i + 1) * n]))
                  for i, point in enumerate(sticking)}
+    starts_said = f"{n} starts" if n > 1 else "1 start"
     print(f"preset {a.preset}, distributed string, {a.duration:g} s runs, metrics over the "
-          f"second half, means over {n} starts; kinematic drive -> Z-Torque (reference tuning"
-          + "".join(f", {k} {v:g}" for k, v in overrides.items()) + ")")
+          f"second half, means over {starts_said}; kinematic drive -> Z-Torque (reference "
+          "tuning" + "".join(f", {k} {v:g}" for k, v in overrides.items()) + ")")
     print("| rpm | WOB kN | sensors | kinematic SSI / stick | absorbing top within the "
           "motor's limits: stick | Z-Torque SSI / stick / sat | verdict |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
@@ -158,8 +166,10 @@ def main() -> int:
         kin, zt = results[(r, w, p, "kinematic")], results[(r, w, p, "z_torque")]
         top = absorbing.get((r, w))
         top_cell = "-" if top is None else f"{top:.2f}"
+        said = verdict(kin, zt, top)
+        said += why_not(kin, zt) if said == "not cured" else ""
         print(f"| {r:g} | {w:g} | {p} | {kin[4]:.2f} / {kin[5]:.2f} | {top_cell} | "
-              f"{zt[4]:.2f} / {zt[5]:.2f} / {zt[6]:.2f} | {verdict(kin, zt, top)} |")
+              f"{zt[4]:.2f} / {zt[5]:.2f} / {zt[6]:.3f} | {said} |")
     if a.plot:
         _plot(a, rpms, wobs, results, absorbing)
     return 0
@@ -181,10 +191,12 @@ def _values(ap: argparse.ArgumentParser, name: str, text: str, top: float,
 def _overrides(ap: argparse.ArgumentParser, items: list[str],
                preset_name: str) -> dict[str, float]:
     """``--gain`` NAME=VALUE items as Z-Torque gains, each checked by building the law with
-    them (its constructor names a bad value and the range it expects)."""
+    them as the runs will, on the preset's drive (its constructor names a bad value and the
+    range it expects)."""
     out: dict[str, float] = {}
     for item in items:
         name, sep, value = item.partition("=")
+        name = name.strip()
         if not sep or name not in ZTorque.GAINS:
             ap.error(f"--gain {item!r}: expected NAME=VALUE with NAME one of Z-Torque's gains "
                      f"({', '.join(ZTorque.GAINS)})")
@@ -193,11 +205,12 @@ def _overrides(ap: argparse.ArgumentParser, items: list[str],
         except ValueError:
             ap.error(f"--gain {item!r}: {value!r} is not a number")
     preset = load_preset(preset_name)
+    drive = law_top_drive(preset, "z_torque", None)
     for profile in ("ideal", "surface_rig"):
+        settings = LoopSettings(law="z_torque", sensor_profile=profile, string_model="distributed",
+                                gains=gains_of(preset_name, "z_torque", profile, out))
         try:
-            make_law("z_torque", 1e-3, pipe_impedance(preset),
-                     preset.top_drive.top_drive_inertia_kg_m2,
-                     **gains_of(preset_name, "z_torque", profile, out))
+            build_law(preset, settings, drive)
         except ParameterError as exc:
             ap.error(f"--gain: {exc}")
     return out
