@@ -32,7 +32,7 @@ import numpy as np
 
 from drill_sim.cli.checks import Number, in_range
 from drill_sim.cli.errors import UsageError
-from drill_sim.core import ParameterError, load_preset
+from drill_sim.core import ParameterError, Preset, load_preset
 from drill_sim.core import kernel as kn
 from drill_sim.core.rig import Rig
 from drill_sim.core.sensors import SensorBank
@@ -46,7 +46,7 @@ STARTS = (1e-3, -1e-3, 3e-3, 1e-2, -1e-2)    # the perturbations averaged over: 
                                              # border one run's stuck fraction is noisy
 
 
-def loop_step_s(preset) -> float:
+def loop_step_s(preset: Preset) -> float:
     """The step [s] of the offline loop's rig (``drill_sim control``, the control map): the
     fewest whole steps of at most the model's default that make its 1 ms tick."""
     tick_s = 1e-3
