@@ -75,26 +75,24 @@ def absorbed(job: tuple[str, float, float, float, float]) -> float:
                          limited=True, perturbation=perturbation)[0]
 
 
+def missed_bars(kin: tuple, zt: tuple) -> list[str]:
+    """The cure's bars Z-Torque missed (none: cured)."""
+    return [what for what, bad in (("stuck", zt[5] > CURED_STICK),
+                                   ("saturated", zt[6] >= CURED_SATURATION),
+                                   ("SSI", zt[4] > CURED_SSI_RATIO * kin[4])) if bad]
+
+
 def verdict(kin: tuple, zt: tuple, absorbing_stuck: float | None) -> str:
     """'-' the kinematic drive stuck under 20 % (not scored); 'cured' where Z-Torque meets the
     bars; else 'not curable' where the absorbing top within the motor's limits sticks over the
     bar too (a crude top, so a cure outranks it), or 'not cured'."""
     if kin[5] < STICKS:
         return "-"
-    if (zt[5] <= CURED_STICK and zt[6] < CURED_SATURATION
-            and zt[4] <= CURED_SSI_RATIO * kin[4]):
+    if not missed_bars(kin, zt):
         return "cured"
     if absorbing_stuck is not None and absorbing_stuck > CURED_STICK:
         return "not curable"
     return "not cured"
-
-
-def why_not(kin: tuple, zt: tuple) -> str:
-    """The bars Z-Torque missed, for a 'not cured' row."""
-    missed = [what for what, bad in (("stuck", zt[5] > CURED_STICK),
-                                     ("saturated", zt[6] >= CURED_SATURATION),
-                                     ("SSI", zt[4] > CURED_SSI_RATIO * kin[4])) if bad]
-    return f" ({', '.join(missed)})" if missed else ""
 
 
 def main() -> int:
@@ -167,7 +165,8 @@ def main() -> int:
         top = absorbing.get((r, w))
         top_cell = "-" if top is None else f"{top:.2f}"
         said = verdict(kin, zt, top)
-        said += why_not(kin, zt) if said == "not cured" else ""
+        if said == "not cured":
+            said += f" ({', '.join(missed_bars(kin, zt))})"
         print(f"| {r:g} | {w:g} | {p} | {kin[4]:.2f} / {kin[5]:.2f} | {top_cell} | "
               f"{zt[4]:.2f} / {zt[5]:.2f} / {zt[6]:.3f} | {said} |")
     if a.plot:
