@@ -89,7 +89,9 @@ class StampMatched:
         if ns.size == 0:
             return out
         last = ns.max()
-        while not self._done and (self._ns.size == 0 or self._ns[-1] < last):
+        # read past ``last``: a stamp shared by two samples (a reset) can end one chunk and
+        # begin the next
+        while not self._done and (self._ns.size == 0 or self._ns[-1] <= last):
             try:
                 more_ns, more = next(self._chunks)
             except StopIteration:
