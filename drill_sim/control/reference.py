@@ -44,8 +44,11 @@ kN·m·s/rad) the exact signals' 29 Hz put the motor on a limit 61 % of the time
 takes base to 2.9 Hz and long to 6.8 Hz, and leaves field_a's 9.5 Hz. And α comes down to 0.3:
 on a long string the top absorbs by swinging the drive's inertia, and α 0.5 asked the motor for
 more than its 60 kN·m 7-9 % of the time where 0.3 cures the same points at 0-2 %
-(msg_docs/control.md, "The control map"). The lumped string's tunings are these rules,
-unchanged.
+(msg_docs/control.md, "The control map"). Where even that is more than the motor can pay
+(field_a at 250 kN, whose wall takes 16 of the 60 kN·m: on its limit 6-21 % of the time at 0.3,
+and 0.2 loses long's 100 rpm / 160 kN), α backs off to keep the motor on its limits about 3 % of
+the time, down to 0.15 (``z_torque``'s saturation regulator, 0.3/s). The lumped string's
+tunings are these rules, unchanged.
 """
 
 from __future__ import annotations
@@ -61,6 +64,8 @@ COMPENSATED_FRACTION = 0.95       # J_c / J_TD of the reference SoftSpeed
 DERIVATIVE_CORNER_PER_MODE = 25.0  # SoftSpeed's derivative corner / f₁
 Z_TORQUE_ALPHA = 0.5               # the reference Z-Torque's α
 DISTRIBUTED_Z_TORQUE_ALPHA = 0.3   # its α on the distributed string (see the docstring)
+DISTRIBUTED_Z_TORQUE_BACKOFF = {"alpha_min": 0.15, "backoff_per_s": 0.3,
+                                "saturation_target": 0.03}   # α within the motor's limits
 STIFFNESS_AT_MODE = 6.0           # Z-Torque: K_p / (J_TD ω₁), at least
 NOISY_TORQUE_LOWPASS_PER_MODE = 2.0   # Z-Torque's LPF_T / f₁ when the speed signal is noisy
 SIGNAL_GAINS = ("measurement_period_s", "torque_signal_tau_s", "speed_signal_tau_s")
@@ -87,6 +92,7 @@ def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
         gains = {k: v for k, v in gains.items()
                  if k not in SIGNAL_GAINS and k != "torque_lowpass_hz"}
         gains["alpha"] = DISTRIBUTED_Z_TORQUE_ALPHA
+        gains.update(DISTRIBUTED_Z_TORQUE_BACKOFF)
     top_mode = torsional_modes_hz(preset.rig, preset.string, float(top_drive_inertia_kg_m2))
     z = pipe_impedance(preset)
     tuned = passive_gains(law, sample_period_s, z, top_drive_inertia_kg_m2, gains,

@@ -25,6 +25,14 @@ must reach it aligned in time, or what is left of T_m closes a loop of its own. 
 - each signal through the other's filter too (``torque_signal_tau_s``, ``speed_signal_tau_s``:
   the first-order lag the drive puts on each), so both have passed the same chain.
 
+A saturation regulator (off unless ``backoff_per_s`` > 0) keeps α within what the motor can
+pay: the match makes the motor swing the drive's inertia, T_m ≈ (α K_p/Z) T_p at the higher
+modes, and a motor on its limit matches nothing. While the PI's output is on a limit the α in
+use falls at ``backoff_per_s`` (1 − s) [α's fraction per second], otherwise it climbs back at
+``backoff_per_s`` s, s = ``saturation_target``, between ``alpha_min`` and α: where α makes the
+motor saturate more than s of the time it settles where it saturates s of the time, elsewhere
+α stays. It acts only on the limits, so the linearised law (``impedance``) is unchanged.
+
 Filters (``filters`` module: prewarped Tustin sections, corners exact at any sample rate):
 LPF_ω 10 Hz, LPF_T 2.5 Hz, HPF 0.05 Hz. The HPF removes the mean drilling torque (which the PI's
 integral carries) so that only oscillations are fed back; LPF_T bounds what the difference does
@@ -47,13 +55,15 @@ MAX_MEASUREMENT_PERIOD_S = 1.0    # signals slower than this are no drive's spee
 class ZTorque(Law):
     """Z-Torque: a stiff speed PI on e = Ω_set - ω̂ - α T̃/Z (see the module docstring)."""
 
-    __slots__ = ("alpha", "highpass", "lowpass_out", "lowpass_speed", "lowpass_torque",
-                 "measurement_period_s", "pi", "pipe_torque_estimate_nm", "speed_lag",
-                 "speed_window", "torque_feedback_nm", "torque_lag", "torque_window")
+    __slots__ = ("alpha", "alpha_min", "alpha_scale", "backoff_per_s", "highpass", "lowpass_out",
+                 "lowpass_speed", "lowpass_torque", "measurement_period_s", "pi",
+                 "pipe_torque_estimate_nm", "saturation_target", "speed_lag", "speed_window",
+                 "torque_feedback_nm", "torque_lag", "torque_window")
     name = "z_torque"
     GAINS = ("alpha", "kp_nm_s_rad", "ki_nm_rad", "speed_lowpass_hz", "torque_lowpass_hz",
              "highpass_hz", "measurement_period_s", "torque_signal_tau_s",
-             "speed_signal_tau_s", "torque_min_nm", "torque_max_nm")
+             "speed_signal_tau_s", "torque_min_nm", "torque_max_nm", "alpha_min",
+             "backoff_per_s", "saturation_target")
 
     def __init__(self, h_s: float, impedance_nm_s_rad: float, top_drive_inertia_kg_m2: float, *,
                  alpha: float = 0.25, kp_nm_s_rad: float | None = None,
@@ -62,9 +72,16 @@ class ZTorque(Law):
                  measurement_period_s: float = 0.0, torque_signal_tau_s: float = 0.0,
                  speed_signal_tau_s: float = 0.0,
                  torque_min_nm: float = -DEFAULT_TORQUE_LIMIT_NM,
-                 torque_max_nm: float = DEFAULT_TORQUE_LIMIT_NM) -> None:
+                 torque_max_nm: float = DEFAULT_TORQUE_LIMIT_NM, alpha_min: float = 0.0,
+                 backoff_per_s: float = 0.0, saturation_target: float = 0.03) -> None:
         super().__init__(h_s, impedance_nm_s_rad, top_drive_inertia_kg_m2)
         self.alpha = check_number("alpha", alpha, low_inclusive=True, high=10.0)
+        self.alpha_min = check_number("alpha_min", alpha_min, low_inclusive=True,
+                                      high=self.alpha)
+        self.backoff_per_s = check_number("backoff_per_s", backoff_per_s, low_inclusive=True,
+                                          high=1.0 / h_s)
+        self.saturation_target = check_number("saturation_target", saturation_target, high=0.5)
+        self.alpha_scale = 1.0       # α in use / α: below 1 only after the motor hit a limit
         kp = 50.0 * self.impedance_nm_s_rad if kp_nm_s_rad is None else kp_nm_s_rad
         ki = 5.0 * self.top_drive_inertia_kg_m2 if ki_nm_rad is None else ki_nm_rad
         self.pi = PI(self.h_s, kp, ki, torque_min_nm, torque_max_nm)
@@ -89,6 +106,12 @@ class ZTorque(Law):
         self.pipe_torque_estimate_nm = 0.0     # T̂_p of the last step [N·m]
         self.torque_feedback_nm = 0.0          # T̃ of the last step [N·m]
 
+    @property
+    def alpha_in_use(self) -> float:
+        """The α the law feeds back with now: α, or less while the saturation regulator has
+        backed it off."""
+        return self.alpha * self.alpha_scale
+
     def _settle(self, speed_rad_s: float, motor_torque_nm: float) -> None:
         self.lowpass_speed.settle(speed_rad_s)
         self.lowpass_torque.settle(motor_torque_nm)
@@ -98,6 +121,7 @@ class ZTorque(Law):
         self.torque_window.settle(motor_torque_nm)
         self.highpass.settle(motor_torque_nm)
         self.lowpass_out.settle(0.0)
+        self.alpha_scale = 1.0                 # taking over: the full match until a limit
 
     def reset(self, speed_set_rad_s: float) -> None:
         super().reset(speed_set_rad_s)
@@ -118,8 +142,17 @@ class ZTorque(Law):
         t_tilde = self.lowpass_out.step(self.highpass.step(t_p))
         self.pipe_torque_estimate_nm = t_p
         self.torque_feedback_nm = t_tilde
-        return self.pi.output(self.speed_set_rad_s - speed_hat
-                              - self.alpha * t_tilde / self.impedance_nm_s_rad)
+        out = self.pi.output(self.speed_set_rad_s - speed_hat
+                             - self.alpha_in_use * t_tilde / self.impedance_nm_s_rad)
+        if self.backoff_per_s > 0.0:
+            floor = self.alpha_min / self.alpha if self.alpha > 0.0 else 1.0
+            step = self.backoff_per_s * self.h_s
+            if out >= self.pi.torque_max_nm or out <= self.pi.torque_min_nm:
+                scale = self.alpha_scale - step * (1.0 - self.saturation_target)
+            else:
+                scale = self.alpha_scale + step * self.saturation_target
+            self.alpha_scale = min(max(scale, floor), 1.0)
+        return out
 
     def bumpless_start(self, current_output: float, measurement: SurfaceMeasurement) -> float:
         """Filters settled on the measurement (no oscillation yet), integral loaded."""

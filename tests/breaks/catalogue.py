@@ -36,6 +36,7 @@ T_WELL = "tests/core/test_well.py"
 T_LAWS = "tests/control/test_control_laws.py"
 T_SUP = "tests/control/test_control_supervisor.py"
 T_EVAL = "tests/control/test_control_evaluation.py"
+T_REG = "tests/control/test_z_torque_saturation_regulator.py"
 T_SESSION = "tests/session/test_rig_session.py"
 T_SCENARIO = "tests/session/test_scenario_on_the_clock.py"
 T_VEC_TORQUE = "tests/gym/test_vector_env.py::test_each_rig_equals_a_rig_env_in_torque_mode"
@@ -322,8 +323,8 @@ BREAKS: tuple[Break, ...] = (
         '    return tick_s / (steps_per_tick(tick_s, p["dt_s"]) + 1)',
         "tests/session/test_node_policy.py::test_the_step_divides_the_tick"),
     one("Z-Torque's torque feedback with the wrong sign", CONTROL + "z_torque.py",
-        "- self.alpha * t_tilde / self.impedance_nm_s_rad)",
-        "+ self.alpha * t_tilde / self.impedance_nm_s_rad)",
+        "- self.alpha_in_use * t_tilde / self.impedance_nm_s_rad)",
+        "+ self.alpha_in_use * t_tilde / self.impedance_nm_s_rad)",
         "tests/control/test_z_torque_alignment.py"),
     one("the bumpless start leaves the law's first output off the current torque",
         CONTROL + "laws.py", "        q = output_nm - gain * error_rad_s\n",
@@ -448,6 +449,10 @@ BREAKS: tuple[Break, ...] = (
     one("vector environment: the distributed string's torsional waves of rig 0 for every rig",
         "drill_sim/gym/vector_step.py", "tbuf[i], tlp, tstate[i],", "tbuf[0], tlp, tstate[i],",
         T_VEC_TORQUE),
+    one("a stamped topic matched without reading past the last stamp",
+        "drill_sim/bag/stamped_series.py", "self._ns[-1] <= last):", "self._ns[-1] < last):",
+        "tests/bag/test_stamped_series.py::test_a_shared_stamp_split_across_chunks_at_the_end_"
+        "of_a_read_is_matched"),
     one("a session bag read once without its motor torque in the effort",
         "drill_sim/bag/session_events.py",
         "            stats.add((ns - origin) / 1e9, named[\"bit_speed_rad_s\"], torque,",
@@ -457,6 +462,16 @@ BREAKS: tuple[Break, ...] = (
         f"{CONTROL}reference.py", "DISTRIBUTED_Z_TORQUE_ALPHA = 0.3 ",
         "DISTRIBUTED_Z_TORQUE_ALPHA = 0.5 ",
         f"{T_EVAL}::test_on_long_z_torque_cures_100_rpm_160_kn_through_the_rigs_sensors"),
+    one("the distributed string's Z-Torque without its saturation regulator",
+        f"{CONTROL}reference.py", "        gains.update(DISTRIBUTED_Z_TORQUE_BACKOFF)\n", "",
+        f"{T_EVAL}::test_on_field_a_z_torque_cures_100_rpm_250_kn_within_the_motor_through_"
+        "the_rigs_sensors"),
+    one("Z-Torque's saturation regulator backing α off at the rate it climbs back",
+        f"{CONTROL}z_torque.py", "step * (1.0 - self.saturation_target)",
+        "step * self.saturation_target",
+        f"{T_REG}::test_alpha_backs_off_on_a_limit_and_climbs_back_off_it_at_the_documented_rates",
+        f"{T_EVAL}::test_on_field_a_z_torque_cures_100_rpm_250_kn_within_the_motor_through_"
+        "the_rigs_sensors"),
     one("the distributed string's Z-Torque keeping the noise rule's low torque low-pass",
         f"{CONTROL}reference.py",
         'k not in SIGNAL_GAINS and k != "torque_lowpass_hz"}',

@@ -313,8 +313,8 @@ def test_on_the_damped_distributed_string_z_torque_stops_the_first_modes_stickin
     """control.md's distributed table: on the preset's damped pipe at 60 rpm / 100 kN the
     kinematic drive sticks (0.16 of the window) and Z-Torque, tuned to the distributed f1 and
     passive up to the fifth mode, with ideal signals cures it as the control map's verdict
-    counts a cure (stick <= 1 %: 0; SSI <= 0.75 of the kinematic's: 0.67 against 1.27; its
-    output on a limit < 5 % of the samples: 0.1 %); on the lossless pipe it did not (the
+    counts a cure (stick <= 1 %: 0; SSI <= 0.75 of the kinematic's: 0.63 against 1.27; its
+    output on a limit < 5 % of the samples: 0); on the lossless pipe it did not (the
     undamped third mode, control.md)."""
     scenario = Scenario.steady(60.0, 100.0, duration_s=60.0, window_start_s=30.0)
     rows = {law: run_loop(preset, scenario, LoopSettings(
@@ -349,7 +349,7 @@ def test_on_long_z_torque_cures_100_rpm_160_kn_through_the_rigs_sensors():
     absorbing top within the motor's limits cures, the kinematic drive sticks (0.32 of the
     window over five starts) and the reference Z-Torque on ``surface_rig``'s signals cures it
     as the map counts a cure (stick <= 1 %, SSI <= 0.75 of the kinematic's, output on a limit
-    < 5 %: 0.00, 0.78 against 1.28 and 1 % over five starts). With the noise rule's 0.47 Hz
+    < 5 %: 0.00, 0.87 against 1.28 and 1.7 % over five starts). With the noise rule's 0.47 Hz
     torque low-pass it stayed stuck 0.24; with α 0.5 its motor sat at a limit 18 %."""
     long = load_preset("long")
     scenario = Scenario.steady(100.0, 160.0, duration_s=60.0, window_start_s=30.0)
@@ -363,3 +363,31 @@ def test_on_long_z_torque_cures_100_rpm_160_kn_through_the_rigs_sensors():
     assert z.stick_fraction <= 0.01
     assert z.ssi <= 0.75 * kinematic.ssi
     assert z.saturation_fraction < 0.05
+
+
+@LONG
+def test_on_field_a_z_torque_cures_100_rpm_250_kn_within_the_motor_through_the_rigs_sensors():
+    """control.md's control map: on field_a's deviated well at 100 rpm / 250 kN (its wall
+    takes 16 of the motor's 60 kN·m) the kinematic drive sticks (0.51 over five starts) and
+    the reference Z-Torque on ``surface_rig``'s signals cures it as the map counts a cure, its
+    saturation regulator holding the motor on a limit at its 3 % target (0.030 over five
+    starts; the regulator's rates are in the ratio 0.97 : 0.03); without the regulator, α 0.3
+    put it on a limit 21 % of the time."""
+    field_a = load_preset("field_a")
+    scenario = Scenario.steady(100.0, 250.0, duration_s=60.0, window_start_s=30.0)
+    gains = reference_gains("z_torque", field_a, field_a.top_drive.top_drive_inertia_kg_m2,
+                            string_model="distributed",
+                            sensor_profile="surface_rig")
+
+    def run(law: str, **override: float):
+        return run_loop(field_a, scenario, LoopSettings(
+            law=law, string_model="distributed", sensor_profile="surface_rig",
+            gains={**gains, **override} if law == "z_torque" else {}))
+
+    kinematic, z, unregulated = run("kinematic"), run("z_torque"), run("z_torque",
+                                                                       backoff_per_s=0.0)
+    assert kinematic.stick_fraction >= 0.2
+    assert z.stick_fraction <= 0.01
+    assert z.ssi <= 0.75 * kinematic.ssi
+    assert 0.015 < z.saturation_fraction < 0.045
+    assert unregulated.saturation_fraction > 0.1

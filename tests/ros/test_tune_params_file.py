@@ -47,4 +47,5 @@ def test_tune_writes_a_params_file_the_controller_starts_from(ros, tmp_path):
                                       "expected one of alpha, kp_nm_s_rad, ki_nm_rad, "
                                       "speed_lowpass_hz, torque_lowpass_hz, highpass_hz, "
                                       "measurement_period_s, torque_signal_tau_s, "
-                                      "speed_signal_tau_s (the torque limits are the drive's)")
+                                      "speed_signal_tau_s, alpha_min, backoff_per_s, "
+                                      "saturation_target (the torque limits are the drive's)")
