@@ -42,6 +42,7 @@ from ..control.policy import POLICY_LAW, PolicyLaw, load_policy
 from ..control.sampled_loop import MOTOR, SETPOINT, SPEED, SURFACE, SampledLoop, controller_status
 from ..control.supervisor import Supervisor, law_gain_defaults
 from ..control.tuning import pipe_impedance
+from ..control.z_torque import ZTorque
 from ..core.parameters import ParameterError
 from ..wire import rig_topics
 from ..wire.qos import RELIABLE
@@ -460,7 +461,9 @@ class ControllerNode(Node):
                   # what ran: the active law's gains (SI, names as the parameters'), or the
                   # policy's callable
                   "gains": json.dumps(self._gains(law.name)) if law.name in LAWS else "{}",
-                  "policy": self._p["policy"] if law.name == POLICY_LAW else ""}
+                  "policy": self._p["policy"] if law.name == POLICY_LAW else "",
+                  # Z-Torque's α after its saturation regulator (α itself while it is off)
+                  "alpha_in_use": f"{law.alpha_in_use:.6g}" if isinstance(law, ZTorque) else ""}
         arr = DiagnosticArray()
         arr.header.stamp = self.get_clock().now().to_msg()
         arr.status = [DiagnosticStatus(level=level, name=f"{self.get_name()}: controller",

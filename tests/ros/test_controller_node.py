@@ -87,6 +87,7 @@ def test_controller_takes_over_bumplessly_answers_each_sample_and_reports(ros):
                  30.0, "diagnostics while controlling")
         values = {v.key: v.value for v in diagnostics[-1].values}
         assert {"law", "saturation_fraction", "windup_fraction", "samples"} <= set(values)
+        assert float(values["alpha_in_use"]) == 1.0      # z_torque.alpha as set, regulator off
         assert float(values["sample_period_s"]) == 1 / 250    # read from the rig's rate_hz
         off = _set(ros, controller, "enabled",
                    ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=False))
