@@ -29,9 +29,10 @@ A saturation regulator (off unless ``backoff_per_s`` > 0) keeps α within what t
 pay: the match makes the motor swing the drive's inertia, T_m ≈ (α K_p/Z) T_p at the higher
 modes, and a motor on its limit matches nothing. While the PI's output is on a limit the α in
 use falls at ``backoff_per_s`` (1 − s) [α's fraction per second], otherwise it climbs back at
-``backoff_per_s`` s, s = ``saturation_target``, between ``alpha_min`` and α: where α makes the
-motor saturate more than s of the time it settles where it saturates s of the time, elsewhere
-α stays. It acts only on the limits, so the linearised law (``impedance``) is unchanged.
+``backoff_per_s`` s, s = ``saturation_target``, between ``alpha_min`` and α (a floor at or
+above α: it never backs off): where α makes the motor saturate more than s of the time it
+settles where it saturates s of the time, elsewhere α stays. It acts only on the limits, so
+the linearised law (``impedance``) is unchanged.
 
 Filters (``filters`` module: prewarped Tustin sections, corners exact at any sample rate):
 LPF_ω 10 Hz, LPF_T 2.5 Hz, HPF 0.05 Hz. The HPF removes the mean drilling torque (which the PI's
@@ -76,8 +77,8 @@ class ZTorque(Law):
                  backoff_per_s: float = 0.0, saturation_target: float = 0.03) -> None:
         super().__init__(h_s, impedance_nm_s_rad, top_drive_inertia_kg_m2)
         self.alpha = check_number("alpha", alpha, low_inclusive=True, high=10.0)
-        self.alpha_min = check_number("alpha_min", alpha_min, low_inclusive=True,
-                                      high=self.alpha)
+        # a floor at or above α: never backs off (α can be lowered without touching it)
+        self.alpha_min = check_number("alpha_min", alpha_min, low_inclusive=True, high=10.0)
         self.backoff_per_s = check_number("backoff_per_s", backoff_per_s, low_inclusive=True,
                                           high=1.0 / h_s)
         self.saturation_target = check_number("saturation_target", saturation_target, high=0.5)
@@ -145,7 +146,7 @@ class ZTorque(Law):
         out = self.pi.output(self.speed_set_rad_s - speed_hat
                              - self.alpha_in_use * t_tilde / self.impedance_nm_s_rad)
         if self.backoff_per_s > 0.0:
-            floor = self.alpha_min / self.alpha if self.alpha > 0.0 else 1.0
+            floor = min(self.alpha_min / self.alpha, 1.0) if self.alpha > 0.0 else 1.0
             step = self.backoff_per_s * self.h_s
             if out >= self.pi.torque_max_nm or out <= self.pi.torque_min_nm:
                 scale = self.alpha_scale - step * (1.0 - self.saturation_target)

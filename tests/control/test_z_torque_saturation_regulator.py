@@ -71,3 +71,12 @@ def test_taking_over_restores_the_full_alpha():
     assert law.alpha_in_use < 0.4
     law.bumpless_start(500.0, SurfaceMeasurement(0.0, 10.0, 500.0, 500.0))
     assert law.alpha_in_use == 0.4
+
+
+def test_a_floor_at_or_above_alpha_never_backs_off():
+    """alpha_min at or above α (α lowered below the reference's 0.15 floor): on a limit the
+    law keeps α, and α can be lowered without touching the floor."""
+    law = _law(backoff_per_s=2.0, alpha_min=0.5)
+    for _ in range(200):
+        assert law.step(SurfaceMeasurement(0.0, 0.0, 0.0, 0.0)) == LIMIT_NM
+    assert law.alpha_in_use == 0.4
