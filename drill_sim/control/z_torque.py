@@ -28,7 +28,7 @@ must reach it aligned in time, or what is left of T_m closes a loop of its own. 
 A saturation regulator (off unless ``backoff_per_s`` > 0) keeps α within what the motor can
 pay: the match makes the motor swing the drive's inertia, T_m ≈ (α K_p/Z) T_p at the higher
 modes, and a motor on its limit matches nothing. While the PI's output is on a limit the α in
-use falls at ``backoff_per_s`` (1 − s) [α's fraction per second], otherwise it climbs back at
+use falls at ``backoff_per_s`` (1 − s) [of the α set, per second], otherwise it climbs back at
 ``backoff_per_s`` s, s = ``saturation_target``, between ``alpha_min`` and α (a floor at or
 above α: it never backs off): where α makes the motor saturate more than s of the time it
 settles where it saturates s of the time, elsewhere α stays. It acts only on the limits, so
