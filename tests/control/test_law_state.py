@@ -40,12 +40,16 @@ def test_a_new_law_at_rest_commands_nothing(name):
 @pytest.mark.parametrize("name", LAWS)
 def test_a_reset_forgets_the_history(name):
     """After any history, reset(Ω) leaves the law as a new one reset(Ω): the same inputs then
-    give the same outputs, to the last bit (Z-Torque with both signal lags, held signals)."""
+    give the same outputs, to the last bit (Z-Torque with both signal lags, held signals, and
+    its saturation regulator backed off by a history on its limits)."""
     gains = {"soft_speed": {"compensated_inertia_kg_m2": 2000.0},
              "z_torque": {"torque_signal_tau_s": 0.05, "speed_signal_tau_s": 0.02,
-                          "measurement_period_s": 0.03}}.get(name, {})
+                          "measurement_period_s": 0.03, "backoff_per_s": 5.0,
+                          "torque_min_nm": -2000.0, "torque_max_nm": 2000.0}}.get(name, {})
     used, new = make_law(name, H, Z, J, **gains), make_law(name, H, Z, J, **gains)
     _history(used, 1)
+    if name == "z_torque":                      # the history backed the regulator's α off
+        assert used.alpha_in_use < used.alpha
     used.reset(4.0)
     new.reset(4.0)
     inputs = [SurfaceMeasurement(k * H, 4.0 + 0.5 * math.sin(0.2 * k), 3000.0 + 100.0 * k,
