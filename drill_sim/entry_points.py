@@ -15,8 +15,11 @@ import importlib
 import signal
 import sys
 
+_SIGNALLED: list[int] = []       # signals that came while importing
+
 
 def _quiet(signum: int, frame) -> None:
+    _SIGNALLED.append(signum)
     raise SystemExit(128 + signum)
 
 
@@ -27,6 +30,8 @@ def _main(module: str) -> int:
     main = importlib.import_module(module).main
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, term)
+    if _SIGNALLED:      # an import swallowed the SystemExit (``except BaseException``): stop
+        return 128 + _SIGNALLED[0]
     return main()
 
 

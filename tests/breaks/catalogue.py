@@ -449,6 +449,10 @@ BREAKS: tuple[Break, ...] = (
     one("vector environment: the distributed string's torsional waves of rig 0 for every rig",
         "drill_sim/gym/vector_step.py", "tbuf[i], tlp, tstate[i],", "tbuf[0], tlp, tstate[i],",
         T_VEC_TORQUE),
+    one("a program running on after an import swallowed the signal's exit",
+        "drill_sim/entry_points.py", "    if _SIGNALLED:", "    if False:",
+        "tests/cli/test_entry_points.py::test_a_signal_whose_exit_an_import_swallowed_still_"
+        "stops_the_program"),
     one("a stamped topic matched without reading past the last stamp",
         "drill_sim/bag/stamped_series.py", "self._ns[-1] <= last):", "self._ns[-1] < last):",
         "tests/bag/test_stamped_series.py::test_a_shared_stamp_split_across_chunks_at_the_end_"
