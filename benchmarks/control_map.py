@@ -37,7 +37,7 @@ from drill_sim.control.closed_loop import run_loop
 from drill_sim.control.evaluation import LoopSettings, build_law, law_top_drive
 from drill_sim.control.reference import reference_gains
 from drill_sim.control.z_torque import ZTorque
-from drill_sim.core import ParameterError, load_preset
+from drill_sim.core import ParameterError, Preset, load_preset
 from drill_sim.session.scenario import Scenario
 
 STICKS, CURED_STICK, CURED_SATURATION, CURED_SSI_RATIO = 0.20, 0.01, 0.05, 0.75
@@ -45,11 +45,10 @@ WOB_MAX_KN = 1e4             # as drill_sim control's --wob-kn
 ABSORBING_TAU_S = 10.0       # the absorbing top's mean-speed loop, as absorbing_top_runs.py's
 
 
-def gains_of(preset_name: str, law: str, profile: str,
+def gains_of(preset: Preset, law: str, profile: str,
              overrides: dict[str, float]) -> dict[str, float]:
     """The reference gains of ``law`` on the preset's distributed string for ``profile``'s
     signals, with ``overrides`` (``--gain``) for Z-Torque."""
-    preset = load_preset(preset_name)
     gains = reference_gains(law, preset, preset.top_drive.top_drive_inertia_kg_m2,
                             string_model="distributed", sensor_profile=profile)
     return {**gains, **overrides} if law == "z_torque" else gains
@@ -59,7 +58,7 @@ def one(job: tuple[str, float, float, str, str, float, float, dict[str, float]])
     """(ssi, stick, saturation) of one run."""
     preset_name, rpm, wob, profile, law, duration, perturbation, overrides = job
     preset = load_preset(preset_name)
-    gains = gains_of(preset_name, law, profile, overrides)
+    gains = gains_of(preset, law, profile, overrides)
     settings = LoopSettings(law=law, gains=gains, string_model="distributed",
                             sensor_profile=profile, perturbation=perturbation)
     r = run_loop(preset, Scenario.steady(rpm, wob, duration_s=duration,
@@ -207,7 +206,7 @@ def _overrides(ap: argparse.ArgumentParser, items: list[str],
     drive = law_top_drive(preset, "z_torque", None)
     for profile in ("ideal", "surface_rig"):
         settings = LoopSettings(law="z_torque", sensor_profile=profile, string_model="distributed",
-                                gains=gains_of(preset_name, "z_torque", profile, out))
+                                gains=gains_of(preset, "z_torque", profile, out))
         try:
             build_law(preset, settings, drive)
         except ParameterError as exc:

@@ -213,8 +213,7 @@ def run(args: argparse.Namespace) -> int:
                         results.append(run_loop(preset, scenario, one, progress=report,
                                                 record=bag))
                     except NoSteadyDrilling as exc:     # the steady start: not a bug
-                        rig = preset.rig
-                        least_kn = rig.groups.lam * rig.scales.force_n / 1e3
+                        least_kn = preset.rig.friction_weight_n / 1e3
                         raise UsageError(f"scenario {scenario.name}, its steady start: {exc}; "
                                          f"expected a weight on bit above {least_kn:.4g} kN "
                                          "on this preset") from None

@@ -56,10 +56,11 @@ MAX_MEASUREMENT_PERIOD_S = 1.0    # signals slower than this are no drive's spee
 class ZTorque(Law):
     """Z-Torque: a stiff speed PI on e = Ω_set - ω̂ - α T̃/Z (see the module docstring)."""
 
-    __slots__ = ("alpha", "alpha_min", "alpha_scale", "backoff_per_s", "highpass", "lowpass_out",
-                 "lowpass_speed", "lowpass_torque", "measurement_period_s", "pi",
-                 "pipe_torque_estimate_nm", "saturation_target", "speed_lag", "speed_window",
-                 "torque_feedback_nm", "torque_lag", "torque_window")
+    __slots__ = ("alpha", "alpha_min", "alpha_scale", "backoff_per_s", "backoff_step",
+                 "floor_scale", "highpass", "lowpass_out", "lowpass_speed", "lowpass_torque",
+                 "measurement_period_s", "pi", "pipe_torque_estimate_nm", "saturation_target",
+                 "speed_lag", "speed_window", "torque_feedback_nm", "torque_lag",
+                 "torque_window")
     name = "z_torque"
     GAINS = ("alpha", "kp_nm_s_rad", "ki_nm_rad", "speed_lowpass_hz", "torque_lowpass_hz",
              "highpass_hz", "measurement_period_s", "torque_signal_tau_s",
@@ -82,6 +83,8 @@ class ZTorque(Law):
         self.backoff_per_s = check_number("backoff_per_s", backoff_per_s, low_inclusive=True,
                                           high=1.0 / h_s)
         self.saturation_target = check_number("saturation_target", saturation_target, high=0.5)
+        self.backoff_step = self.backoff_per_s * h_s       # of the scale, per sample
+        self.floor_scale = min(self.alpha_min / self.alpha, 1.0) if self.alpha > 0.0 else 1.0
         self.alpha_scale = 1.0       # α in use / α: below 1 only after the motor hit a limit
         kp = 50.0 * self.impedance_nm_s_rad if kp_nm_s_rad is None else kp_nm_s_rad
         ki = 5.0 * self.top_drive_inertia_kg_m2 if ki_nm_rad is None else ki_nm_rad
@@ -146,8 +149,7 @@ class ZTorque(Law):
         out = self.pi.output(self.speed_set_rad_s - speed_hat
                              - self.alpha_in_use * t_tilde / self.impedance_nm_s_rad)
         if self.backoff_per_s > 0.0:
-            floor = min(self.alpha_min / self.alpha, 1.0) if self.alpha > 0.0 else 1.0
-            step = self.backoff_per_s * self.h_s
+            floor, step = self.floor_scale, self.backoff_step
             if out >= self.pi.torque_max_nm or out <= self.pi.torque_min_nm:
                 scale = self.alpha_scale - step * (1.0 - self.saturation_target)
             else:
