@@ -346,11 +346,13 @@ def test_on_base_z_torque_through_the_rigs_sensors_stays_off_its_limits(preset):
 @LONG
 def test_on_long_z_torque_cures_100_rpm_160_kn_through_the_rigs_sensors():
     """control.md's control map: on long's 3000 m damped pipe at 100 rpm / 160 kN, a point the
-    absorbing top within the motor's limits cures, the kinematic drive sticks (0.32 of the
-    window over five starts) and the reference Z-Torque on ``surface_rig``'s signals cures it
-    as the map counts a cure (stick <= 1 %, SSI <= 0.75 of the kinematic's, output on a limit
-    < 5 %: 0.00, 0.87 against 1.28 and 1.7 % over five starts). With the noise rule's 0.47 Hz
-    torque low-pass it stayed stuck 0.24; with α 0.5 its motor sat at a limit 18 %."""
+    absorbing top within the motor's limits cures, the kinematic drive sticks (0.30 of the
+    window over 40 starts) and, from the default start (the bit's speed perturbed by 1e-3), the
+    reference Z-Torque on ``surface_rig``'s signals clears it as the map counts a cure (stick
+    <= 1 %, SSI <= 0.75 of the kinematic's, output on a limit < 5 %). This holds that start,
+    not the map's verdict: over the map's 40 starts it misses by a little (stuck 0.014, SSI
+    0.97 against 0.95), eight of them sticking over 1 %, up to 0.17. With the noise rule's
+    0.47 Hz torque low-pass it stayed stuck 0.24; with α 0.5 its motor sat at a limit 18 %."""
     long = load_preset("long")
     scenario = Scenario.steady(100.0, 160.0, duration_s=60.0, window_start_s=30.0)
     rows = {law: run_loop(long, scenario, LoopSettings(
