@@ -37,6 +37,7 @@ from drill_sim.cli.errors import UsageError
 from drill_sim.core import ParameterError, Preset, load_preset
 from drill_sim.core import kernel as kn
 from drill_sim.core.rig import Rig
+from drill_sim.core.sensor_profile import load_profile
 from drill_sim.core.sensors import SensorBank
 from drill_sim.core.simulator import DEFAULT_DT
 from drill_sim.session.rules import steps_per_tick
@@ -153,12 +154,13 @@ def run_sampled(preset_name: str, rpm: float, wob_kn: float, profile: str, start
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    ap.add_argument("--preset", default="long")
+    ap.add_argument("--preset", default="long", help="a shipped preset or a preset YAML file")
     ap.add_argument("--points", default="40:120,40:160,55:160,70:160,100:160",
                     help="rpm:kN, comma-separated")
-    ap.add_argument("--duration", type=float, default=60.0)
+    ap.add_argument("--duration", type=float, default=60.0,
+                    help="each run [s], 1 to 3600; the metrics over its second half")
     ap.add_argument("--tau", type=float, default=10.0,
-                    help="the mean-speed loop's time constant [s]")
+                    help="the mean-speed loop's time constant [s], above 0 and at most 3600")
     ap.add_argument("--starts", type=int, default=len(CURABILITY_STARTS),
                     help=f"steady starts averaged per point, 1 to {len(CURABILITY_STARTS)} "
                     "(the first of CURABILITY_STARTS; --sensors runs the five of STARTS)")
@@ -187,8 +189,13 @@ def main() -> None:
         ap.error(f"--starts {a.starts}: expected 1 to {len(CURABILITY_STARTS)}")
     if a.workers < 1:
         ap.error(f"--workers {a.workers}: expected at least 1")
-    if a.tau <= 0.0:
-        ap.error(f"--tau {a.tau:g}: expected a time constant above 0 s")
+    if not 0.0 < a.tau <= 3600.0:
+        ap.error(f"--tau {a.tau:g}: expected a time constant above 0 s and at most 3600 s")
+    if a.sensors is not None:
+        try:
+            load_profile(a.sensors)
+        except ParameterError as exc:
+            ap.error(f"--sensors {a.sensors}: {exc}")
     try:
         load_preset(a.preset)
     except ParameterError as exc:
@@ -222,8 +229,9 @@ def _one(job: tuple[str, float, float, str, float, float, float]) -> tuple[float
 
 def mean_error(values: np.ndarray) -> str:
     """'mean ± standard error' of a sample, to 3 decimals."""
-    error = values.std(ddof=1) / math.sqrt(values.size) if values.size > 1 else math.nan
-    return f"{values.mean():.3f} ± {error:.3f}"
+    if values.size < 2:
+        return f"{values.mean():.3f} (one start)"
+    return f"{values.mean():.3f} ± {values.std(ddof=1) / math.sqrt(values.size):.3f}"
 
 
 def sampled(a: argparse.Namespace, points: list[tuple[float, ...]]) -> None:

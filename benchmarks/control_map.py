@@ -30,6 +30,7 @@ import sys
 import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
 from absorbing_top_runs import CURABILITY_STARTS, STARTS
@@ -136,6 +137,10 @@ def main() -> int:
         load_preset(a.preset)
     except ParameterError as exc:
         ap.error(f"--preset {a.preset}: {exc}")
+    if a.plot is not None:
+        plot = Path(a.plot)
+        if plot.suffix.lower() != ".png" or not plot.parent.is_dir():
+            ap.error(f"--plot {a.plot}: expected a .png file in an existing directory")
     overrides = _overrides(ap, a.gain, a.preset)
     starts = STARTS[:a.starts]
     # the kinematic drive reads no sensor: one set of its runs serves both profiles
@@ -182,6 +187,10 @@ def main() -> int:
             said += f" ({', '.join(missed_bars(kin, zt))})"
         print(f"| {r:g} | {w:g} | {p} | {kin[4]:.2f} / {kin[5]:.2f} | {top_cell} | "
               f"{zt[4]:.2f} / {zt[5]:.3f} / {zt[6]:.3f} | {said} |")
+    print(f"(-: the kinematic drive stuck under {STICKS:.0%}, not scored; cured: Z-Torque stuck "
+          f"<= {CURED_STICK:.0%}, its output on a limit < {CURED_SATURATION:.0%} of the time and "
+          f"its SSI <= {CURED_SSI_RATIO:g} of the kinematic's; not curable: the absorbing top "
+          f"within the motor's limits stuck over {CURED_STICK:.0%})")
     if a.plot:
         _plot(a, rpms, wobs, results, absorbing)
     return 0
@@ -190,6 +199,8 @@ def main() -> int:
 def _run_all(a: argparse.Namespace, fn: Callable, jobs: list) -> list:
     """``fn`` over ``jobs`` on ``a.workers`` processes, in order, with a count on a terminal."""
     begin, out = time.monotonic(), []
+    if not jobs:
+        return out
     with ProcessPoolExecutor(a.workers) as pool:
         for k, res in enumerate(pool.map(fn, jobs), 1):
             out.append(res)
