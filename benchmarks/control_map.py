@@ -33,7 +33,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from absorbing_top_runs import CURABILITY_STARTS, STARTS
+from absorbing_top_runs import CURABILITY_STARTS, STARTS, mean_error
 from absorbing_top_runs import run as absorbing_run
 
 from drill_sim.cli.checks import Number, in_range
@@ -147,29 +147,25 @@ def main() -> int:
     keys = [(r, w, p, law) for r, w in itertools.product(rpms, wobs)
             for p, law in (("ideal", "kinematic"), ("ideal", "z_torque"),
                            ("surface_rig", "z_torque"))]
-    runs = _run_all(a, one, [(a.preset, *key, a.duration, start, overrides)
-                             for key in keys for start in starts])
+    done = _runs_of(a, keys, starts, overrides, {})
     n = len(starts)
-    results = {key: (*key, *np.mean(runs[i * n:(i + 1) * n], axis=0))
-               for i, key in enumerate(keys)}
+    results = {key: (*key, *np.mean([done[key, s] for s in starts], axis=0)) for key in keys}
     sticking = [(r, w) for r, w in itertools.product(rpms, wobs)
                 if results[(r, w, "ideal", "kinematic")][5] >= STICKS]
-    # the points that stick, scored over many starts: the law's runs and the absorbing top's
+    # the points that stick, scored over many starts (the five among them run once): the
+    # law's runs and the absorbing top's
     scored = CURABILITY_STARTS[:a.scored_starts]
     m = len(scored)
     again = [key for key in keys if key[:2] in sticking]
-    runs = _run_all(a, one, [(a.preset, *key, a.duration, start, overrides)
-                             for key in again for start in scored])
-    results.update({key: (*key, *np.mean(runs[i * m:(i + 1) * m], axis=0))
-                    for i, key in enumerate(again)})
+    done = _runs_of(a, again, scored, overrides, done)
+    results.update({key: (*key, *np.mean([done[key, s] for s in scored], axis=0))
+                    for key in again})
     for r, w in itertools.product(rpms, wobs):
         results[(r, w, "surface_rig", "kinematic")] = results[(r, w, "ideal", "kinematic")]
     stuck = _run_all(a, absorbed, [(a.preset, r, w, a.duration, start)
                                    for r, w in sticking for start in scored])
-    absorbing = {point: float(np.mean(stuck[i * m:(i + 1) * m]))
-                 for i, point in enumerate(sticking)}
-    errors = {point: (float(np.std(stuck[i * m:(i + 1) * m], ddof=1) / np.sqrt(m)) if m > 1
-                      else float("nan")) for i, point in enumerate(sticking)}
+    stuck_at = {point: np.array(stuck[i * m:(i + 1) * m]) for i, point in enumerate(sticking)}
+    absorbing = {point: float(runs.mean()) for point, runs in stuck_at.items()}
     print(f"preset {a.preset}, distributed string, {a.duration:g} s runs, metrics over the "
           f"second half, means over {_starts(n)} ({_starts(m)} where the kinematic drive "
           "sticks); kinematic drive -> Z-Torque (reference tuning"
@@ -181,7 +177,7 @@ def main() -> int:
     for r, w, p in itertools.product(rpms, wobs, ("ideal", "surface_rig")):
         kin, zt = results[(r, w, p, "kinematic")], results[(r, w, p, "z_torque")]
         top = absorbing.get((r, w))
-        top_cell = "-" if top is None else f"{top:.3f} ± {errors[(r, w)]:.3f}"
+        top_cell = "-" if top is None else mean_error(stuck_at[(r, w)])
         said = verdict(kin, zt, top)
         if said == "not cured":
             said += f" ({', '.join(missed_bars(kin, zt))})"
@@ -208,6 +204,15 @@ def _run_all(a: argparse.Namespace, fn: Callable, jobs: list) -> list:
                 print(f"\r{k}/{len(jobs)} runs", end="", file=sys.stderr, flush=True)
     print(f"\r{len(jobs)} runs in {time.monotonic() - begin:.0f} s", file=sys.stderr)
     return out
+
+
+def _runs_of(a: argparse.Namespace, keys: list[tuple], starts: tuple[float, ...],
+             overrides: dict[str, float], done: dict[tuple, tuple]) -> dict[tuple, tuple]:
+    """``done`` and the runs (ssi, stick, saturation) of every (key, start) it lacks."""
+    todo = [(key, start) for key in keys for start in starts if (key, start) not in done]
+    runs = _run_all(a, one, [(a.preset, *key, a.duration, start, overrides)
+                             for key, start in todo])
+    return {**done, **dict(zip(todo, runs, strict=True))}
 
 
 def _starts(n: int) -> str:
