@@ -13,9 +13,10 @@ point "sticks" where the kinematic drive is stuck >= 20 % of the time there; eac
 sticks is then scored over ``--scored-starts`` of the 40 ``CURABILITY_STARTS`` (all three runs
 and the absorbing top's), since near the border one 60 s run's stuck fraction is a draw and
 five starts' mean too (long 40 rpm / 120 kN, the absorbing top within the limits: 0.00 over
-five, 0.014 +- 0.005 over forty; 100 rpm / 160 kN, Z-Torque with ``surface_rig``: 0.00 over
-five, 0.014 over forty). It is "cured" where Z-Torque there sticks <= 1 %, saturates < 5 % and
-its SSI is at most 0.75 of the kinematic's (all means over the starts); it is "not curable"
+five, 0.014 +- 0.005 over forty; 100 rpm / 160 kN, Z-Torque with ``surface_rig`` and the
+rule's gains, before long's commissioning: 0.00 over five, 0.014 over forty). It is "cured"
+where Z-Torque there sticks <= 1 %, saturates < 5 % and its SSI is at most 0.75 of the
+kinematic's (all means over the starts); it is "not curable"
 where even the top that reflects nothing, within the drive's motor limits
 (absorbing_top_runs.py), sticks over 1 % there (a crude top: a cure outranks it); "-": the
 kinematic drive stuck under 20 %, not scored. ``--gain NAME=VALUE`` overrides one of
@@ -169,6 +170,9 @@ def main() -> int:
     print(f"preset {a.preset}, distributed string, {a.duration:g} s runs, metrics over the "
           f"second half, means over {_starts(n)} ({_starts(m)} where the kinematic drive "
           "sticks); kinematic drive -> Z-Torque (reference tuning"
+          + "".join(f", {law} commissioned for surface_rig: "
+                    + ", ".join(f"{k} {v:g}" for k, v in pairs)
+                    for law, pairs in load_preset(a.preset).commissioning if law == "z_torque")
           + "".join(f", {k} {v:g}" for k, v in overrides.items())
           + "); the absorbing top's stick: mean ± standard error")
     print("| rpm | WOB kN | sensors | kinematic SSI / stick | absorbing top within the "

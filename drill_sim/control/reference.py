@@ -49,6 +49,13 @@ more than its 60 kN·m 7-9 % of the time where 0.3 cures the same points at 0-2 
 and 0.2 loses long's 100 rpm / 160 kN), α backs off to keep the motor on its limits about 3 % of
 the time, down to 0.15 (``z_torque``'s saturation regulator, 0.3/s). The lumped string's
 tunings are these rules, unchanged.
+
+Where the rules fall short on one string, the preset says so: its ``commissioning`` section
+sets a law's gains on that string for a drive's sampled or noisy signals (the distributed
+string only), as a drive's controller is commissioned on its rig. long's: a 4.5 Hz speed
+low-pass and a 0.08 Hz high-pass, which cure its 100 rpm / 160 kN through ``surface_rig``
+(stuck 0.014 over 40 starts with the rule's 10 and 0.05 Hz) and would lose field_a's 55 rpm /
+250 kN as a rule (msg_docs/control.md, "Commissioned on long").
 """
 
 from __future__ import annotations
@@ -56,6 +63,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from ..core.parameters import ParameterError
 from ..core.presets import Preset
 from ..core.sensor_profile import SensorProfile, load_profile
 from .tuning import first_mode_frequency_hz, pipe_impedance, torsional_modes_hz
@@ -100,7 +108,25 @@ def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
     if signals or noisy:          # a drive's signals: the estimate's residual loop bounded
         cap_hz = SIGNAL_LOOP_BANDWIDTH_RAD_S * z / (tuned["alpha"] * tuned["kp_nm_s_rad"])
         tuned["torque_lowpass_hz"] = min(tuned["torque_lowpass_hz"], cap_hz / (2.0 * math.pi))
+        tuned.update(commissioned_gains(law, preset))
     return {**tuned, **signals}
+
+
+def commissioned_gains(law: str, preset: Preset) -> dict[str, float]:
+    """The gains of ``law`` the preset's ``commissioning`` section sets on its string for a
+    drive's sampled signals (empty: none); an unknown law or gain there is refused."""
+    from . import LAWS
+    for name, pairs in preset.commissioning:
+        gains = dict(pairs)
+        if name not in LAWS:
+            raise ParameterError(f"preset {preset.name!r}: commissioning.{name}: law {name!r} "
+                                 f"is unknown: expected one of {', '.join(LAWS)}")
+        unknown = sorted(set(gains) - set(LAWS[name].GAINS))
+        if unknown:
+            raise ParameterError(f"preset {preset.name!r}: commissioning.{name}: unknown "
+                                 f"gain(s) {unknown}; expected "
+                                 f"{', '.join(LAWS[name].GAINS) or 'none'}")
+    return preset.commissioned(law)
 
 
 def _lumped_rule(law: str, preset: Preset, top_drive_inertia_kg_m2: float, string_model: str,

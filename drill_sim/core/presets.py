@@ -7,7 +7,9 @@ collar geometry, or a list of ``sections``, from which C, I, M and W_s are compu
 (``TopDriveParameters``' fields; the drive's proportional gain defaults to 50 Z, Z the top
 pipe section's torsional impedance, when the string's geometry is given).
 An optional ``string_model: lumped | distributed`` (default lumped) picks the string's model;
-``distributed`` needs the ``string`` geometry.
+``distributed`` needs the ``string`` geometry. An optional ``commissioning`` section holds, per
+law, gains set on this string for a drive's sampled signals, over the reference rule's
+(``control.reference``).
 """
 
 from __future__ import annotations
@@ -42,6 +44,13 @@ class Preset:
     weight_on_bit_kn: float
     top_drive: TopDriveParameters = field(default_factory=TopDriveParameters)
     string_model: str = "lumped"      # "lumped" or "distributed" (needs ``string``)
+    # per law, gains set on this string for a drive's sampled signals (control.reference):
+    # ((law, ((gain, value), ...)), ...), a tuple so that a preset stays hashable
+    commissioning: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
+
+    def commissioned(self, law: str) -> dict[str, float]:
+        """The gains the ``commissioning`` section sets for ``law`` (empty: none)."""
+        return dict(dict(self.commissioning).get(law, ()))
 
     @property
     def top_drive_speed_rad_s(self) -> float:
@@ -85,11 +94,11 @@ def preset_from_dict(name: str, data: object) -> Preset:
     if string is not None and drive.get("drive_kp_nm_s_rad") is None:
         drive["drive_kp_nm_s_rad"] = KP_PER_IMPEDANCE * string.torsional_impedance_nm_s_rad
     unknown = set(data) - {"description", "bit", "string", "lumped", "well", "commands",
-                           "top_drive", "string_model"}
+                           "top_drive", "string_model", "commissioning"}
     if unknown:
         raise ParameterError(f"preset {name!r}: unknown section(s) {sorted(unknown)}; expected "
                              "description, bit, string or lumped, well, commands, top_drive, "
-                             "string_model")
+                             "string_model, commissioning")
     string_model = _string_model(name, data.get("string_model", "lumped"), string)
     return Preset(
         name=name,
@@ -102,6 +111,7 @@ def preset_from_dict(name: str, data: object) -> Preset:
                                       low_inclusive=True),
         top_drive=TopDriveParameters(**drive),
         string_model=string_model,
+        commissioning=_commissioning(name, data.get("commissioning")),
     )
 
 
@@ -170,6 +180,32 @@ def string_from_dict(name: str, string: object, well: object = None) -> StringGe
         return StringGeometry(**given)
     except ParameterError as exc:
         raise ParameterError(f"preset {name!r}: string: {exc}") from None
+
+
+def _commissioning(name: str, value: object) -> tuple[tuple[str, tuple[tuple[str, float],
+                                                                        ...]], ...]:
+    """The preset's ``commissioning`` section: ``{law: {gain: value}}``, each value a finite
+    number (which laws and gains exist, and their ranges, are checked where the law is built)."""
+    if value is None:                     # absent, or the key with nothing under it
+        return ()
+    if not isinstance(value, dict):
+        raise ParameterError(f"preset {name!r}: commissioning is {type(value).__name__}: "
+                             "expected a mapping of law names to mappings of gains, e.g. "
+                             "{z_torque: {speed_lowpass_hz: 4.5}}")
+    out = []
+    for law, gains in value.items():
+        if not isinstance(gains, dict) or not gains:
+            raise ParameterError(f"preset {name!r}: commissioning.{law} is "
+                                 f"{type(gains).__name__ if gains != {} else 'empty'}: expected "
+                                 "a mapping of gain names to numbers, e.g. {speed_lowpass_hz: "
+                                 "4.5}")
+        try:
+            out.append((str(law), tuple((str(k), check_number(f"commissioning.{law}.{k}", v,
+                                                              low=None))
+                                        for k, v in gains.items())))
+        except ParameterError as exc:
+            raise ParameterError(f"preset {name!r}: {exc}") from None
+    return tuple(out)
 
 
 def _string_model(name: str, value: object, string: StringGeometry | None) -> str:

@@ -465,7 +465,8 @@ BREAKS: tuple[Break, ...] = (
     one("the distributed string's Z-Torque at the lumped rule's α 0.5",
         f"{CONTROL}reference.py", "DISTRIBUTED_Z_TORQUE_ALPHA = 0.3 ",
         "DISTRIBUTED_Z_TORQUE_ALPHA = 0.5 ",
-        f"{T_EVAL}::test_on_long_z_torque_cures_100_rpm_160_kn_through_the_rigs_sensors"),
+        f"{T_EVAL}::test_on_long_z_torque_as_commissioned_cures_100_rpm_160_kn_"
+        "through_the_rigs_sensors"),
     one("the distributed string's Z-Torque without its saturation regulator",
         f"{CONTROL}reference.py", "        gains.update(DISTRIBUTED_Z_TORQUE_BACKOFF)\n", "",
         f"{T_EVAL}::test_on_field_a_z_torque_cures_100_rpm_250_kn_within_the_motor_through_"
@@ -486,7 +487,8 @@ BREAKS: tuple[Break, ...] = (
         f"{CONTROL}reference.py",
         'k not in SIGNAL_GAINS and k != "torque_lowpass_hz"}',
         'k not in SIGNAL_GAINS}',
-        f"{T_EVAL}::test_on_long_z_torque_cures_100_rpm_160_kn_through_the_rigs_sensors"),
+        f"{T_EVAL}::test_on_long_z_torque_as_commissioned_cures_100_rpm_160_kn_"
+        "through_the_rigs_sensors"),
     one("the distributed string's Z-Torque on a drive's signals with the exact signals' low-pass",
         f"{CONTROL}reference.py", "    if signals or noisy:          # a drive's signals",
         "    if not signals:               # a drive's signals",
@@ -496,4 +498,10 @@ BREAKS: tuple[Break, ...] = (
         "    if signals:                   # a drive's signals",
         "tests/control/test_reference_tuning.py::"
         "test_on_the_distributed_string_z_torque_is_capped_for_a_drives_signals"),
+    one("a preset's commissioned gains left out of its reference gains",
+        f"{CONTROL}reference.py", "        tuned.update(commissioned_gains(law, preset))\n", "",
+        "tests/control/test_reference_tuning.py::"
+        "test_a_presets_commissioning_sets_its_gains_for_a_drives_signals_only",
+        f"{T_EVAL}::test_on_long_z_torque_as_commissioned_cures_100_rpm_160_kn_"
+        "through_the_rigs_sensors"),
 )

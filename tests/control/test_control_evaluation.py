@@ -344,27 +344,33 @@ def test_on_base_z_torque_through_the_rigs_sensors_stays_off_its_limits(preset):
 
 
 @LONG
-def test_on_long_z_torque_cures_100_rpm_160_kn_through_the_rigs_sensors():
+def test_on_long_z_torque_as_commissioned_cures_100_rpm_160_kn_through_the_rigs_sensors():
     """control.md's control map: on long's 3000 m damped pipe at 100 rpm / 160 kN, a point the
     absorbing top within the motor's limits cures, the kinematic drive sticks (0.30 of the
-    window over 40 starts) and, from the default start (the bit's speed perturbed by 1e-3), the
-    reference Z-Torque on ``surface_rig``'s signals clears it as the map counts a cure (stick
-    <= 1 %, SSI <= 0.75 of the kinematic's, output on a limit < 5 %). This holds that start,
-    not the map's verdict: over the map's 40 starts it misses by a little (stuck 0.014, SSI
-    0.97 against 0.95), eight of them sticking over 1 %, up to 0.17. With the noise rule's
-    0.47 Hz torque low-pass it stayed stuck 0.24; with α 0.5 its motor sat at a limit 18 %."""
+    window over 40 starts) and the reference Z-Torque on ``surface_rig``'s signals, with the
+    gains long's ``commissioning`` section sets (speed low-pass 4.5 Hz, high-pass 0.08 Hz),
+    clears it as the map counts a cure (stick <= 1 %, SSI <= 0.75 of the kinematic's, output
+    on a limit < 5 %; over the map's 40 starts stuck 0.0007). From this start (the bit's speed
+    perturbed by -0.8 %) the rule's gains alone (10 Hz, 0.05 Hz) stay stuck, as 8 of the 40
+    starts do: the commissioning is what cures it, and a preset that lost it fails here."""
     long = load_preset("long")
     scenario = Scenario.steady(100.0, 160.0, duration_s=60.0, window_start_s=30.0)
-    rows = {law: run_loop(long, scenario, LoopSettings(
-                law=law, string_model="distributed", sensor_profile="surface_rig",
-                gains=reference_gains(law, long, J_TD, string_model="distributed",
-                                      sensor_profile="surface_rig")))
-            for law in ("kinematic", "z_torque")}
-    kinematic, z = rows["kinematic"], rows["z_torque"]
+    gains = reference_gains("z_torque", long, J_TD, string_model="distributed",
+                            sensor_profile="surface_rig")
+    assert (gains["speed_lowpass_hz"], gains["highpass_hz"]) == (4.5, 0.08)
+
+    def run(law: str, **override: float):
+        return run_loop(long, scenario, LoopSettings(
+            law=law, string_model="distributed", sensor_profile="surface_rig",
+            perturbation=-8e-3, gains={**gains, **override} if law == "z_torque" else {}))
+
+    kinematic, z = run("kinematic"), run("z_torque")
+    rule_alone = run("z_torque", speed_lowpass_hz=10.0, highpass_hz=0.05)
     assert kinematic.stick_fraction >= 0.2
     assert z.stick_fraction <= 0.01
     assert z.ssi <= 0.75 * kinematic.ssi
     assert z.saturation_fraction < 0.05
+    assert rule_alone.stick_fraction > 0.01
 
 
 @LONG

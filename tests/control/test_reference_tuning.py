@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import pytest
 
@@ -100,3 +101,57 @@ def test_on_the_distributed_string_z_torque_is_capped_for_a_drives_signals():
     assert reference_gains("z_torque", base, J, string_model="distributed",
                            sensor_profile="surface_rig")["torque_lowpass_hz"] == pytest.approx(
         2.85, abs=0.01)
+
+
+def test_a_presets_commissioning_sets_its_gains_for_a_drives_signals_only():
+    """long's ``commissioning`` section (control.md, "Commissioned on long") replaces the
+    rule's speed low-pass and high-pass where Z-Torque reads a drive's sampled or noisy
+    signals on the distributed string, and nowhere else: exact signals, the lumped string,
+    other laws and presets without the section keep the rule's gains."""
+    long, field_a = load_preset("long"), load_preset("field_a")
+    assert long.commissioned("z_torque") == {"speed_lowpass_hz": 4.5, "highpass_hz": 0.08}
+    assert long.commissioned("soft_speed") == {} == field_a.commissioned("z_torque")
+    assert field_a.commissioning == () == load_preset("base").commissioning
+    assert hash(long) != hash(field_a)
+    drive = reference_gains("z_torque", long, J, string_model="distributed",
+                            sensor_profile="surface_rig")
+    assert (drive["speed_lowpass_hz"], drive["highpass_hz"]) == (4.5, 0.08)
+    for gains in (reference_gains("z_torque", long, J, string_model="distributed"),
+                  reference_gains("z_torque", long, J, sensor_profile="surface_rig"),
+                  reference_gains("z_torque", field_a, J, string_model="distributed",
+                                  sensor_profile="surface_rig")):
+        assert "speed_lowpass_hz" not in gains and "highpass_hz" not in gains
+    assert reference_gains("soft_speed", long, J, string_model="distributed",
+                           sensor_profile="surface_rig") == reference_gains(
+        "soft_speed", long, J, string_model="distributed")
+
+
+@pytest.mark.parametrize(("section", "words"), [
+    ("[]", ["commissioning is list", "mapping of law names"]),
+    ("{z_torque: {}}", ["commissioning.z_torque is empty"]),
+    ("{z_torque: 4.5}", ["commissioning.z_torque is float", "gain names"]),
+    ("{z_torque: {speed_lowpass_hz: .nan}}", ["commissioning.z_torque.speed_lowpass_hz",
+                                              "nan"]),
+    ("{z_torque: {speed_lowpass_hz: fast}}", ["speed_lowpass_hz = 'fast' is not a number"]),
+    ("{z_turk: {speed_lowpass_hz: 4.5}}", ["law 'z_turk' is unknown", "z_torque"]),
+    ("{z_torque: {speed_lowpas_hz: 4.5}}", ["unknown gain(s) ['speed_lowpas_hz']",
+                                            "speed_lowpass_hz"]),
+    ("{z_torque: {speed_lowpass_hz: -1.0}}", ["speed_lowpass_hz", "-1.0"]),
+])
+def test_a_bad_commissioning_section_is_refused_by_name(tmp_path, section, words):
+    """A commissioning section that is not {law: {gain: number}} with known laws and gains
+    and gains in their ranges is refused, naming the preset and the entry, when the preset is
+    loaded or (law and gain names, ranges) when the law's gains are asked for and built."""
+    from drill_sim.control import make_law
+    from drill_sim.core.parameters import ParameterError
+    text = (Path(__file__).parents[2] / "drill_sim" / "presets" / "long.yaml").read_text()
+    text = text[:text.index("commissioning:")] + f"commissioning: {section}\n"
+    path = tmp_path / "tuned.yaml"
+    path.write_text(text)
+    with pytest.raises(ParameterError) as info:
+        preset = load_preset(path)
+        gains = reference_gains("z_torque", preset, J, string_model="distributed",
+                                sensor_profile="surface_rig")
+        make_law("z_torque", 1e-3, pipe_impedance(preset), J, **gains)
+    for word in words:
+        assert word in str(info.value)
