@@ -19,8 +19,10 @@ where Z-Torque there sticks <= 1 %, saturates < 5 % and its SSI is at most 0.75 
 kinematic's (all means over the starts); it is "not curable"
 where even the top that reflects nothing, within the drive's motor limits
 (absorbing_top_runs.py), sticks over 1 % there (a crude top: a cure outranks it); "-": the
-kinematic drive stuck under 20 %, not scored. ``--gain NAME=VALUE`` overrides one of
-Z-Torque's reference gains (a tuning to compare, e.g. field_a's α 0.2 in control.md).
+kinematic drive stuck under 20 %, not scored. Z-Torque's gains are its reference gains, with
+the preset's commissioned ones for ``surface_rig``'s signals (long's: control.md,
+"Commissioned on long"); ``--gain NAME=VALUE`` overrides one of them for both sensor sets (a
+tuning to compare, e.g. field_a's α 0.2 in control.md).
 """
 
 from __future__ import annotations
@@ -41,7 +43,7 @@ from drill_sim.cli.checks import Number, in_range
 from drill_sim.cli.errors import UsageError
 from drill_sim.control.closed_loop import run_loop
 from drill_sim.control.evaluation import LoopSettings, build_law, law_top_drive
-from drill_sim.control.reference import reference_gains
+from drill_sim.control.reference import check_commissioning, reference_gains
 from drill_sim.control.z_torque import ZTorque
 from drill_sim.core import ParameterError, Preset, load_preset
 from drill_sim.session.scenario import Scenario
@@ -121,7 +123,8 @@ def main() -> int:
     ap.add_argument("--plot", default=None,
                     help="a PNG of the map: each point's verdict for each sensor set")
     ap.add_argument("--gain", action="append", default=[], metavar="NAME=VALUE",
-                    help="override one of Z-Torque's reference gains, e.g. alpha=0.2 "
+                    help="override one of Z-Torque's reference gains (with the preset's "
+                    "commissioned ones), for both sensor sets, e.g. alpha=0.2 "
                     "(repeatable; units as in msg_docs/control.md)")
     a = ap.parse_args()
     rpms = _values(ap, "--rpm", a.rpm, 300.0, "rpm")
@@ -135,7 +138,7 @@ def main() -> int:
     if a.workers < 1:
         ap.error(f"--workers {a.workers}: expected at least 1")
     try:
-        load_preset(a.preset)
+        check_commissioning(load_preset(a.preset))
     except ParameterError as exc:
         ap.error(f"--preset {a.preset}: {exc}")
     if a.plot is not None:

@@ -87,7 +87,10 @@ def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
     """Gains of ``law`` tuned for this string and drive, and (Z-Torque) for the signals of
     ``sensor_profile`` (None or ``ideal``: exact signals every sample); empty: the law's
     defaults. On the distributed string the filters are then chosen for a top passive up to
-    the fifth torsional mode at the law's ``sample_period_s`` [s] (``passive``)."""
+    the fifth torsional mode at the law's ``sample_period_s`` [s] (``passive``), and a drive's
+    signals take the preset's commissioned Z-Torque gains (checked here whatever the string
+    and signals: ``check_commissioning``)."""
+    check_commissioning(preset, sample_period_s)
     gains = _lumped_rule(law, preset, top_drive_inertia_kg_m2, string_model, sensor_profile)
     if string_model != "distributed":
         return gains
@@ -112,20 +115,33 @@ def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
     return {**tuned, **signals}
 
 
+def check_commissioning(preset: Preset, sample_period_s: float = 1e-3) -> None:
+    """Refuse a ``commissioning`` section that names a law other than Z-Torque (the law that
+    reads a drive's signals, so the only one it applies to), an unknown gain, or a value out
+    of the gain's range (each over the law's defaults at ``sample_period_s`` [s]), naming the
+    preset and the entry; whether or not this run's string and signals would use it."""
+    from .z_torque import ZTorque
+    for name, pairs in preset.commissioning:
+        where = f"preset {preset.name!r}: commissioning.{name}"
+        if name != ZTorque.name:
+            raise ParameterError(f"{where}: only {ZTorque.name}'s gains are commissioned (the "
+                                 f"law that reads a drive's signals): expected {ZTorque.name}, "
+                                 f"got {name!r}")
+        gains = dict(pairs)
+        unknown = sorted(set(gains) - set(ZTorque.GAINS))
+        if unknown:
+            raise ParameterError(f"{where}: unknown gain(s) {unknown}; expected "
+                                 f"{', '.join(ZTorque.GAINS)}")
+        try:        # a high-pass is checked against the rule's torque low-pass where built
+            ZTorque(sample_period_s, 1.0, 1.0, **{"torque_lowpass_hz": 0.25 / sample_period_s,
+                                                  **gains})
+        except ParameterError as exc:
+            raise ParameterError(f"{where}: {exc}") from None
+
+
 def commissioned_gains(law: str, preset: Preset) -> dict[str, float]:
     """The gains of ``law`` the preset's ``commissioning`` section sets on its string for a
-    drive's sampled signals (empty: none); an unknown law or gain there is refused."""
-    from . import LAWS
-    for name, pairs in preset.commissioning:
-        gains = dict(pairs)
-        if name not in LAWS:
-            raise ParameterError(f"preset {preset.name!r}: commissioning.{name}: law {name!r} "
-                                 f"is unknown: expected one of {', '.join(LAWS)}")
-        unknown = sorted(set(gains) - set(LAWS[name].GAINS))
-        if unknown:
-            raise ParameterError(f"preset {preset.name!r}: commissioning.{name}: unknown "
-                                 f"gain(s) {unknown}; expected "
-                                 f"{', '.join(LAWS[name].GAINS) or 'none'}")
+    drive's sampled signals (empty: none)."""
     return preset.commissioned(law)
 
 

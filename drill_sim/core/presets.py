@@ -185,7 +185,8 @@ def string_from_dict(name: str, string: object, well: object = None) -> StringGe
 def _commissioning(name: str, value: object) -> tuple[tuple[str, tuple[tuple[str, float],
                                                                         ...]], ...]:
     """The preset's ``commissioning`` section: ``{law: {gain: value}}``, each value a finite
-    number (which laws and gains exist, and their ranges, are checked where the law is built)."""
+    number (which law and gains, and their ranges: ``control.reference.check_commissioning``,
+    wherever reference gains are computed)."""
     if value is None:                     # absent, or the key with nothing under it
         return ()
     if not isinstance(value, dict):
@@ -195,8 +196,8 @@ def _commissioning(name: str, value: object) -> tuple[tuple[str, tuple[tuple[str
     out = []
     for law, gains in value.items():
         if not isinstance(gains, dict) or not gains:
-            raise ParameterError(f"preset {name!r}: commissioning.{law} is "
-                                 f"{type(gains).__name__ if gains != {} else 'empty'}: expected "
+            got = "empty" if gains is None or gains == {} else type(gains).__name__
+            raise ParameterError(f"preset {name!r}: commissioning.{law} is {got}: expected "
                                  "a mapping of gain names to numbers, e.g. {speed_lowpass_hz: "
                                  "4.5}")
         try:

@@ -107,7 +107,8 @@ def test_a_presets_commissioning_sets_its_gains_for_a_drives_signals_only():
     """long's ``commissioning`` section (control.md, "Commissioned on long") replaces the
     rule's speed low-pass and high-pass where Z-Torque reads a drive's sampled or noisy
     signals on the distributed string, and nowhere else: exact signals, the lumped string,
-    other laws and presets without the section keep the rule's gains."""
+    other laws and presets without the section (deep too, long's string) keep the rule's
+    gains."""
     long, field_a = load_preset("long"), load_preset("field_a")
     assert long.commissioned("z_torque") == {"speed_lowpass_hz": 4.5, "highpass_hz": 0.08}
     assert long.commissioned("soft_speed") == {} == field_a.commissioned("z_torque")
@@ -119,7 +120,9 @@ def test_a_presets_commissioning_sets_its_gains_for_a_drives_signals_only():
     for gains in (reference_gains("z_torque", long, J, string_model="distributed"),
                   reference_gains("z_torque", long, J, sensor_profile="surface_rig"),
                   reference_gains("z_torque", field_a, J, string_model="distributed",
-                                  sensor_profile="surface_rig")):
+                                  sensor_profile="surface_rig"),
+                  reference_gains("z_torque", load_preset("deep"), J,    # long's string
+                                  string_model="distributed", sensor_profile="surface_rig")):
         assert "speed_lowpass_hz" not in gains and "highpass_hz" not in gains
     assert reference_gains("soft_speed", long, J, string_model="distributed",
                            sensor_profile="surface_rig") == reference_gains(
@@ -133,25 +136,33 @@ def test_a_presets_commissioning_sets_its_gains_for_a_drives_signals_only():
     ("{z_torque: {speed_lowpass_hz: .nan}}", ["commissioning.z_torque.speed_lowpass_hz",
                                               "nan"]),
     ("{z_torque: {speed_lowpass_hz: fast}}", ["speed_lowpass_hz = 'fast' is not a number"]),
-    ("{z_turk: {speed_lowpass_hz: 4.5}}", ["law 'z_turk' is unknown", "z_torque"]),
+    ("{z_turk: {speed_lowpass_hz: 4.5}}", ["commissioning.z_turk",
+                                          "expected z_torque, got 'z_turk'"]),
     ("{z_torque: {speed_lowpas_hz: 4.5}}", ["unknown gain(s) ['speed_lowpas_hz']",
                                             "speed_lowpass_hz"]),
-    ("{z_torque: {speed_lowpass_hz: -1.0}}", ["speed_lowpass_hz", "-1.0"]),
+    ("{z_torque: {speed_lowpass_hz: -1.0}}", ["'tuned': commissioning.z_torque: "
+                                              "speed_lowpass_hz = -1.0 is out of range"]),
+    ("{z_torque: {speed_lowpass_hz: 5000}}", ["'tuned': commissioning.z_torque: "
+                                              "speed_lowpass_hz = 5000"]),
+    ("{soft_speed: {derivative_corner_hz: 3.0}}", ["commissioning.soft_speed: only "
+                                                   "z_torque's gains", "'soft_speed'"]),
+    ("{z_torque: }", ["commissioning.z_torque is empty"]),
 ])
 def test_a_bad_commissioning_section_is_refused_by_name(tmp_path, section, words):
-    """A commissioning section that is not {law: {gain: number}} with known laws and gains
-    and gains in their ranges is refused, naming the preset and the entry, when the preset is
-    loaded or (law and gain names, ranges) when the law's gains are asked for and built."""
-    from drill_sim.control import make_law
+    """A commissioning section that is not {z_torque: {gain: number}} with known gains in
+    their ranges is refused, naming the preset and the entry, when the preset is loaded or
+    (the law, gain names and ranges) when reference gains are computed, for any law, string
+    model and signals: not only where the section would apply."""
     from drill_sim.core.parameters import ParameterError
     text = (Path(__file__).parents[2] / "drill_sim" / "presets" / "long.yaml").read_text()
     text = text[:text.index("commissioning:")] + f"commissioning: {section}\n"
     path = tmp_path / "tuned.yaml"
     path.write_text(text)
-    with pytest.raises(ParameterError) as info:
-        preset = load_preset(path)
-        gains = reference_gains("z_torque", preset, J, string_model="distributed",
-                                sensor_profile="surface_rig")
-        make_law("z_torque", 1e-3, pipe_impedance(preset), J, **gains)
-    for word in words:
-        assert word in str(info.value)
+    for law, string_model, profile in (("z_torque", "distributed", "surface_rig"),
+                                       ("z_torque", "lumped", None),
+                                       ("soft_speed", "distributed", "ideal")):
+        with pytest.raises(ParameterError) as info:
+            reference_gains(law, load_preset(path), J, string_model=string_model,
+                            sensor_profile=profile)
+        for word in words:
+            assert word in str(info.value)
