@@ -51,7 +51,7 @@ the time, down to 0.15 (``z_torque``'s saturation regulator, 0.3/s). The lumped 
 tunings are these rules, unchanged.
 
 Where the rules fall short on one string, the preset says so: its ``commissioning`` section
-sets a law's gains on that string for a drive's sampled or noisy signals (the distributed
+sets Z-Torque's gains on that string for a drive's sampled or noisy signals (the distributed
 string only), as a drive's controller is commissioned on its rig. long's: a 4.5 Hz speed
 low-pass and a 0.08 Hz high-pass, which cure its 100 rpm / 160 kN through ``surface_rig``
 (stuck 0.014 over 40 starts with the rule's 10 and 0.05 Hz) and would lose field_a's 55 rpm /
@@ -111,7 +111,7 @@ def reference_gains(law: str, preset: Preset, top_drive_inertia_kg_m2: float, *,
     if signals or noisy:          # a drive's signals: the estimate's residual loop bounded
         cap_hz = SIGNAL_LOOP_BANDWIDTH_RAD_S * z / (tuned["alpha"] * tuned["kp_nm_s_rad"])
         tuned["torque_lowpass_hz"] = min(tuned["torque_lowpass_hz"], cap_hz / (2.0 * math.pi))
-        tuned.update(commissioned_gains(law, preset))
+        tuned.update(preset.commissioned(law))
     return {**tuned, **signals}
 
 
@@ -137,12 +137,6 @@ def check_commissioning(preset: Preset, sample_period_s: float = 1e-3) -> None:
                                                   **gains})
         except ParameterError as exc:
             raise ParameterError(f"{where}: {exc}") from None
-
-
-def commissioned_gains(law: str, preset: Preset) -> dict[str, float]:
-    """The gains of ``law`` the preset's ``commissioning`` section sets on its string for a
-    drive's sampled signals (empty: none)."""
-    return preset.commissioned(law)
 
 
 def _lumped_rule(law: str, preset: Preset, top_drive_inertia_kg_m2: float, string_model: str,

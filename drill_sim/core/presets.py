@@ -7,8 +7,8 @@ collar geometry, or a list of ``sections``, from which C, I, M and W_s are compu
 (``TopDriveParameters``' fields; the drive's proportional gain defaults to 50 Z, Z the top
 pipe section's torsional impedance, when the string's geometry is given).
 An optional ``string_model: lumped | distributed`` (default lumped) picks the string's model;
-``distributed`` needs the ``string`` geometry. An optional ``commissioning`` section holds, per
-law, gains set on this string for a drive's sampled signals, over the reference rule's
+``distributed`` needs the ``string`` geometry. An optional ``commissioning`` section holds
+Z-Torque's gains as set on this string for a drive's signals, over the reference rule's
 (``control.reference``).
 """
 
@@ -44,7 +44,7 @@ class Preset:
     weight_on_bit_kn: float
     top_drive: TopDriveParameters = field(default_factory=TopDriveParameters)
     string_model: str = "lumped"      # "lumped" or "distributed" (needs ``string``)
-    # per law, gains set on this string for a drive's sampled signals (control.reference):
+    # gains set on this string for a drive's signals, by law (z_torque: control.reference):
     # ((law, ((gain, value), ...)), ...), a tuple so that a preset stays hashable
     commissioning: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
 

@@ -499,7 +499,7 @@ BREAKS: tuple[Break, ...] = (
         "tests/control/test_reference_tuning.py::"
         "test_on_the_distributed_string_z_torque_is_capped_for_a_drives_signals"),
     one("a preset's commissioned gains left out of its reference gains",
-        f"{CONTROL}reference.py", "        tuned.update(commissioned_gains(law, preset))\n", "",
+        f"{CONTROL}reference.py", "        tuned.update(preset.commissioned(law))\n", "",
         "tests/control/test_reference_tuning.py::"
         "test_a_presets_commissioning_sets_its_gains_for_a_drives_signals_only",
         f"{T_EVAL}::test_on_long_z_torque_as_commissioned_cures_100_rpm_160_kn_"
