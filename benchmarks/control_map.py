@@ -138,14 +138,15 @@ def main() -> int:
     if a.workers < 1:
         ap.error(f"--workers {a.workers}: expected at least 1")
     try:
-        check_commissioning(load_preset(a.preset))
+        preset = load_preset(a.preset)
+        check_commissioning(preset)
     except ParameterError as exc:
         ap.error(f"--preset {a.preset}: {exc}")
     if a.plot is not None:
         plot = Path(a.plot)
         if plot.suffix.lower() != ".png" or not plot.parent.is_dir():
             ap.error(f"--plot {a.plot}: expected a .png file in an existing directory")
-    overrides = _overrides(ap, a.gain, a.preset)
+    overrides = _overrides(ap, a.gain, preset)
     starts = STARTS[:a.starts]
     # the kinematic drive reads no sensor: one set of its runs serves both profiles
     keys = [(r, w, p, law) for r, w in itertools.product(rpms, wobs)
@@ -170,12 +171,12 @@ def main() -> int:
                                    for r, w in sticking for start in scored])
     stuck_at = {point: np.array(stuck[i * m:(i + 1) * m]) for i, point in enumerate(sticking)}
     absorbing = {point: float(runs.mean()) for point, runs in stuck_at.items()}
+    commissioned = preset.commissioned("z_torque")
     print(f"preset {a.preset}, distributed string, {a.duration:g} s runs, metrics over the "
           f"second half, means over {_starts(n)} ({_starts(m)} where the kinematic drive "
           "sticks); kinematic drive -> Z-Torque (reference tuning"
-          + "".join(f", {law} commissioned for surface_rig: "
-                    + ", ".join(f"{k} {v:g}" for k, v in pairs)
-                    for law, pairs in load_preset(a.preset).commissioning if law == "z_torque")
+          + (", z_torque commissioned for surface_rig: "
+             + ", ".join(f"{k} {v:g}" for k, v in commissioned.items()) if commissioned else "")
           + "".join(f", {k} {v:g}" for k, v in overrides.items())
           + "); the absorbing top's stick: mean ± standard error")
     print("| rpm | WOB kN | sensors | kinematic SSI / stick | absorbing top within the "
@@ -240,7 +241,7 @@ def _values(ap: argparse.ArgumentParser, name: str, text: str, top: float,
 
 
 def _overrides(ap: argparse.ArgumentParser, items: list[str],
-               preset_name: str) -> dict[str, float]:
+               preset: Preset) -> dict[str, float]:
     """``--gain`` NAME=VALUE items as Z-Torque gains, each checked by building the law with
     them as the runs will, on the preset's drive (its constructor names a bad value and the
     range it expects)."""
@@ -255,7 +256,6 @@ def _overrides(ap: argparse.ArgumentParser, items: list[str],
             out[name] = float(Number(value.strip()))
         except ValueError:
             ap.error(f"--gain {item!r}: {value!r} is not a number")
-    preset = load_preset(preset_name)
     drive = law_top_drive(preset, "z_torque", None)
     for profile in ("ideal", "surface_rig"):
         settings = LoopSettings(law="z_torque", sensor_profile=profile, string_model="distributed",
