@@ -18,7 +18,7 @@ from drill_sim.cli.case import si_case
 from drill_sim.core import load_preset
 from drill_sim.core.distributed import geometry_waves
 from drill_sim.core.stability import steady_state
-from drill_sim.core.stability_distributed import _newton_from_grid, characteristic
+from drill_sim.core.stability_distributed import characteristic, find_roots
 
 POINTS = [("long", 40, 120), ("long", 40, 160), ("long", 55, 160), ("long", 70, 160),
           ("long", 100, 160), ("field_a", 40, 160), ("field_a", 55, 160), ("field_a", 70, 160),
@@ -38,7 +38,7 @@ def rightmost(preset_name: str, rpm: float, wob_kn: float, absorbing: bool) -> c
         w = z * np.sqrt(s * (s + nu)) * np.sqrt(1.0 + eta * s)
         return np.where(w.real < 0.0, -w, w), np.ones_like(s)     # Re W > 0: absorbing
     st = steady_state(case.groups, case.w0, case.omega0)
-    roots = _newton_from_grid(BOX, lambda s: characteristic(
+    roots = find_roots(BOX, lambda s: characteristic(
         s, case.groups, st, waves, top if absorbing else None), 80)
     roots = roots[(np.abs(roots) > 1e-7) & (roots.imag > 0.0)]
     return complex(roots[np.argmax(roots.real)])

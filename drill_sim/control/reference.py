@@ -1,61 +1,28 @@
-"""The reference tunings the evaluation scores each law with, derived from the string, the drive
-and the signals the law reads.
+"""The reference tunings the evaluation scores each law with (``reference_gains``), derived from
+the string, the drive and the signals the law reads.
 
-The laws' own defaults are those of the NORCE Simulator4nDOF, chosen for long strings (first
-mode ≈ 0.2 Hz) and a 10 ms loop. On a short string the first mode is faster (base: 0.76 Hz)
-and two things the defaults take for granted stop holding (msg_docs/control.md, "Tuning for
-the node's rates"):
+The laws' own defaults (NORCE Simulator4nDOF) suit long strings (first mode ≈ 0.2 Hz) and a
+10 ms loop; a short string's first mode f₁ is faster (base: 0.76 Hz), so these rules set the
+gains from f₁, the first torsional mode with the top drive's inertia J_TD, of the string model
+the law runs on (``first_mode_frequency_hz``: lumped or distributed):
 
-- Z-Torque needs the drive's speed loop to be stiff *at the mode*, K_p ≫ J_TD ω₁, so that the
-  top follows Ω_set − α T̃/Z; with K_p = 50 Z = 15.1 kN·m·s/rad and J_TD ω₁ = 13.9 kN·m·s/rad
-  on base the top's admittance lags by ≈ 45° before any filter and the match is lost. Rule:
-  K_p = max(50 Z, 6 J_TD ω₁). α = 0.5: with 0.25 Z-Torque keeps stick-slip from growing but,
-  switched on in established stick-slip, clears it at only some switch instants (base, 60 rpm,
-  100 kN: 2 of 4); with 0.5 at all of them.
-- SoftSpeed's inertia compensation differentiates the speed; its filter must pass the mode
-  with little lag: corner 25 f₁ (19 Hz on base, against 5 Hz by default). J_c = 0.95 J_TD,
-  f_t = f₁.
+- SoftSpeed: f_t = f₁, J_c = 0.95 J_TD, derivative corner 25 f₁, so that its inertia
+  compensation passes the mode with little lag.
+- Z-Torque: K_p = max(50 Z, 6 J_TD ω₁), so that the drive's speed loop is stiff at the mode,
+  and α = 0.5. Its pipe-torque estimate is fed back with the gain α K_p/Z, so its two signals
+  must arrive aligned: it is told the drive's signals (``sensor_profile``: update period, each
+  signal's filter), and with a noisy speed signal its torque low-pass comes down to 2 f₁.
+- On the distributed string, whose higher modes these filters made the top feed, the filters
+  keep the top passive up to the fifth torsional mode at the law's sample period (``passive``).
+  Z-Torque there takes α = 0.3 (the top absorbs by swinging the drive's inertia, and 0.5 asked
+  the motor for more than it has), with the saturation regulator backing α off (down to 0.15,
+  at 0.3/s) to keep the motor on its limits about 3 % of the time, and the passive torque
+  low-pass of exact signals in place of the noise rule's; for a drive's sampled or noisy
+  signals that corner ω_T is capped at (α K_p/Z) ω_T ≤ 1100 rad/s (a measured bound) and the
+  preset's ``commissioning`` gains apply. The lumped string's tunings are the rules above.
 
-Z-Torque's pipe-torque estimate T_m − J_TD dΩ/dt is fed back with a gain α K_p/Z ≈ 140, so its
-two signals must reach it aligned (``z_torque``): with a sensor profile, the law is told what
-the drive's signals are -- how often they update (the slower of the speed's and the motor
-torque's rates) and each one's first-order filter -- as an engineer reads them off the drive's
-data sheet. When the speed signal is noisy the torque low-pass comes down to 2 f₁ (1.5 Hz on
-base: 2.4 times less motor-torque noise for 20° more lag at the mode).
-
-f₁ is the first torsional mode with the top's inertia (``first_mode_frequency_hz``), of the
-string model the law will run on: lumped √(C(1/I + 1/J_TD)), or the distributed pipe's own
-frequency equation (base: 0.76 and 0.57 Hz).
-
-On the distributed string the pipe's higher modes are there too, and these rules' filters made
-the top feed them (Re Z_top < 0 from ~1 Hz for SoftSpeed, ~1.8 Hz for Z-Torque on base): there
-the filters are then chosen for a top passive up to the fifth mode (``passive``), for the law's
-sample period. For Z-Torque that filter is chosen on exact signals and then replaces the noise
-rule's low one too: with a drive's 10 ms signals no low-pass keeps the linearised top passive
-up to f₅ (on long Re Z_top < 0 from ≈ 1.1 Hz whatever the corner), the ladder's closest was a
-339 Hz corner that ran the motor from limit to limit, and the noise rule's 0.47 Hz on long left
-the law blind to the 1.2 Hz stick-slip of 100 rpm / 160 kN (stuck 0.24 with ``surface_rig``,
-0.00 with the exact signals' 7.6 Hz). With such signals (or a noisy speed) what is left of T_m
-in the pipe-torque estimate (their lags, their staircase, the noise) is fed back with the gain
-α K_p/Z, a loop whose gain grows with the low-pass's corner ω_T; so ω_T is capped at (α K_p/Z)
-ω_T = 1100 rad/s, a bound measured between two failures, not derived: on base (K_p 62
-kN·m·s/rad) the exact signals' 29 Hz put the motor on a limit 61 % of the time and 3.2 Hz 12 %,
-2.5 Hz 1 % (five starts); on long (26 kN·m·s/rad) 4.7 Hz left 100 rpm / 160 kN stuck 0.05. It
-takes base to 2.9 Hz and long to 6.8 Hz, and leaves field_a's 9.5 Hz. And α comes down to 0.3:
-on a long string the top absorbs by swinging the drive's inertia, and α 0.5 asked the motor for
-more than its 60 kN·m 7-9 % of the time where 0.3 cures the same points at 0-2 %
-(msg_docs/control.md, "The control map"). Where even that is more than the motor can pay
-(field_a at 250 kN, whose wall takes 16 of the 60 kN·m: on its limit 6-21 % of the time at 0.3,
-and 0.2 loses long's 100 rpm / 160 kN), α backs off to keep the motor on its limits about 3 % of
-the time, down to 0.15 (``z_torque``'s saturation regulator, 0.3/s). The lumped string's
-tunings are these rules, unchanged.
-
-Where the rules fall short on one string, the preset says so: its ``commissioning`` section
-sets Z-Torque's gains on that string for a drive's sampled or noisy signals (the distributed
-string only), as a drive's controller is commissioned on its rig. long's: a 4.5 Hz speed
-low-pass and a 0.08 Hz high-pass, which cure its 100 rpm / 160 kN through ``surface_rig``
-(stuck 0.014 over 40 starts with the rule's 10 and 0.05 Hz) and would lose field_a's 55 rpm /
-250 kN as a rule (msg_docs/control.md, "Commissioned on long").
+Why each rule, and the runs that set it: msg_docs/control.md, "Tuning for the node's rates"
+(and "Passive up to the fifth mode", "Commissioned on long").
 """
 
 from __future__ import annotations

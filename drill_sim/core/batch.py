@@ -14,16 +14,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import distributed_kernel as dk
-from . import kernel as kn
+from . import state_layout as sl
+from .distributed_simulator import _Line
 from .sensors import SensorBank
 from .simulator import Simulator
 
-# the simulator's arrays that are each rig's own (a distributed string adds its lines')
-_STATE = ("_x", "_k", "_surf", "_p", "_c", "_acc")
-_LINE_STATE = ("buf", "state")
-_LINE_FIXED = ("z", "n", "f", "c", "rel", "off", "lowpass")
 _BANK = ("_par", "_state", "_istate", "_ring", "_noise", "_window", "_x", "_out", "_fresh")
+# what running a distributed string does not change: the same for every rig, kept once
+_SHARED = tuple(f"{line}.{name}" for line in ("torsion", "axial")
+                for name in (*_Line.FIXED, "lowpass"))
 
 
 def _stacked(n: int, a: np.ndarray) -> np.ndarray:
@@ -31,54 +30,54 @@ def _stacked(n: int, a: np.ndarray) -> np.ndarray:
 
 
 class RigBatch:
-    """The stacked state of ``n`` rigs shaped as ``sim`` and ``bank`` (the first rig's);
-    ``lines_args``: a distributed string's line arrays in ``distributed_kernel.advance``'s
-    order (per rig stacked where a rig's own), or arrays of their types for a lumped one."""
+    """The stacked state of ``n`` rigs shaped as ``sim`` and ``bank`` (the first rig's): each
+    array the simulator steps (``Simulator.arrays``) stacked where it is a rig's own, kept once
+    where it is shared; ``string_args``: a distributed string's lines, wall and work arrays as
+    ``distributed_kernel.advance`` takes them, stacked where a rig's own (a lumped string:
+    arrays of their types, never read)."""
 
     def __init__(self, n: int, sim: Simulator, bank: SensorBank) -> None:
-        self.distributed = hasattr(sim, "waves")
-        self.no_rows = np.zeros((0, dk.NOD if self.distributed else kn.NO))
-        self.state = {name: _stacked(n, getattr(sim, name)) for name in _STATE}
-        self.x, self.k, self.surf, self.p, self.c, self.acc = (self.state[s] for s in _STATE)
+        self.distributed = sim.MODEL == sl.DISTRIBUTED
+        self.no_rows = np.zeros((0, sl.OUTPUTS.size(sim.MODEL)))
+        arrays = sim.arrays()
+        self.own = {name: _stacked(n, a) for name, a in arrays.items() if name not in _SHARED}
+        self.shared = {name: arrays[name] for name in _SHARED if name in arrays}
+        self.x, self.k, self.surf, self.p, self.c, self.acc = (
+            self.own[name] for name in ("x", "k", "surface", "p", "c", "acc"))
         self.bank = {name: _stacked(n, getattr(bank, name)) for name in _BANK}
         self.window_s = bank._window_s
         if self.distributed:
-            self.lines = {(w, name): _stacked(n, getattr(getattr(sim, "_" + w), name))
-                          for w in "ta" for name in _LINE_STATE}
-            self.rest = {"_scratch": _stacked(n, sim._scratch),
-                         "_slots": _stacked(n, sim._slots), "_stuck": _stacked(n, sim._stuck)}
-            self.fixed = {(w, name): getattr(getattr(sim, "_" + w), name)
-                          for w in "ta" for name in _LINE_FIXED}
-            self.wall = sim._wall
-            line = [[self.fixed[(w, name)] for name in _LINE_FIXED[:6]]
-                    + [self.lines[(w, "buf")], self.fixed[(w, "lowpass")],
-                       self.lines[(w, "state")]] for w in "ta"]
-            self.lines_args = (*line[0], *line[1], self.rest["_scratch"], self.rest["_slots"],
-                               *self.wall, self.rest["_stuck"])
+            self.string_args = (self._line("torsion"), self._line("axial"), sim._wall,
+                                (self.own["scratch"], self.own["slots"], self.own["stuck"]))
         else:                                # the distributed arguments' types, never read
             f1, i1 = np.zeros(1), np.zeros(1, dtype=np.int64)
             f2, f3 = np.zeros((1, 1)), np.zeros((1, 1, 1))
-            one = (f1, i1, f1, f1, f1, i1, f2, f2, f3)
-            self.lines_args = (*one, *one, f3, np.zeros((1, 1, 1), dtype=np.int64), f1, f1, f1,
-                               1.0, f3, np.zeros((1, 1), dtype=np.int64))
+            line = (f1, i1, f1, f1, f1, i1, f2, f2, f3)
+            self.string_args = (line, line, (f1, f1, f1, 1.0, f3),
+                                (f3, np.zeros((1, 1, 1), dtype=np.int64),
+                                 np.zeros((1, 1), dtype=np.int64)))
+
+    def _line(self, name: str) -> tuple:
+        """A line as ``_Line.kernel_args``, its buffers and low-pass states stacked."""
+        shared = [self.shared[f"{name}.{attr}"] for attr in _Line.FIXED]
+        return (*shared, self.own[f"{name}.buf"], self.shared[f"{name}.lowpass"],
+                self.own[f"{name}.state"])
 
     def adopt(self, i: int, sim: Simulator, bank: SensorBank) -> None:
         """Row i becomes ``sim``'s and ``bank``'s state: copied in, and they read and write it
         there."""
-        if hasattr(sim, "waves") != self.distributed or sim._surf.shape != self.surf.shape[1:] \
+        arrays = sim.arrays()
+        if set(arrays) != set(self.own) | set(self.shared) or any(
+                arrays[name].shape != stack.shape[1:] for name, stack in self.own.items()) \
                 or bank._ring.shape != self.bank["_ring"].shape[1:]:
             raise ValueError("a rig of another shape (preset, step, string model or sensor "
                              "profile) than the batch's")
-        if self.distributed:
-            for (w, name), fixed in self.fixed.items():
-                if not np.array_equal(getattr(getattr(sim, "_" + w), name), fixed):
-                    raise ValueError("a distributed string unlike the batch's first")
-        pairs = [(sim, name, self.state[name]) for name in _STATE]
+        for name, fixed in self.shared.items():
+            if not np.array_equal(arrays[name], fixed):
+                raise ValueError("a distributed string unlike the batch's first")
+        homes = sim._homes()
+        pairs = [(*homes[name], stack) for name, stack in self.own.items()]
         pairs += [(bank, name, self.bank[name]) for name in _BANK]
-        if self.distributed:
-            pairs += [(getattr(sim, "_" + w), name, self.lines[(w, name)])
-                      for w in "ta" for name in _LINE_STATE]
-            pairs += [(sim, name, stack) for name, stack in self.rest.items()]
         for owner, name, stack in pairs:
             row = stack[i]
             row[...] = getattr(owner, name)

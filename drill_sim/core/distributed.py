@@ -23,7 +23,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .parameters import ParameterError, RigParameters, check_number
-from .string_geometry import StringGeometry, area_m2, polar_moment_m4
+from .string_geometry import StringGeometry
+from .tube import Tube
 
 STRING_MODELS = ("lumped", "distributed")
 DAMPING_STATIONS = 8        # dashpots per section when it is damped (none when undamped)
@@ -45,48 +46,28 @@ def check_string_model(name: object) -> str:
 
 
 @dataclass(frozen=True)
-class Section:
-    """A uniform tube of the pipe, SI. Viscous damping per unit length: torsional [N m s/rad
-    per m], axial [N s/m per m]; material (Kelvin-Voigt) retardation times [s]: the shear
-    stress is G (strain + eta strain rate), likewise E axially. 0 (the defaults): lossless.
-    Its material (moduli [Pa], density [kg/m^3]); None: ``string_waves``' arguments. Against
-    the wall: the force per unit length pressing it there [N/m] at the centre of each of its
-    ``DAMPING_STATIONS`` equal parts (the stations), and the friction coefficients."""
+class Section(Tube):
+    """A uniform tube of the pipe (``Tube``: geometry [m]; material, moduli [Pa] and density
+    [kg/m^3], None: ``string_waves``' arguments). Viscous damping per unit length: torsional
+    [N m s/rad per m], axial [N s/m per m]; material (Kelvin-Voigt) retardation times [s]: the
+    shear stress is G (strain + eta strain rate), likewise E axially. 0 (the defaults):
+    lossless. Against the wall: the force per unit length pressing it there [N/m] at the
+    centre of each of its ``DAMPING_STATIONS`` equal parts (the stations), and the friction
+    coefficients."""
 
-    length_m: float
-    od_m: float
-    id_m: float
     torsional_damping: float = 0.0
     axial_damping: float = 0.0
     torsional_retardation_s: float = 0.0
     axial_retardation_s: float = 0.0
-    shear_modulus_pa: float | None = None
-    young_modulus_pa: float | None = None
-    density_kg_m3: float | None = None
     wall_n_m: tuple[float, ...] = ()       # the wall's force per length [N/m] at each station
     friction_static: float = 0.0
     friction_dynamic: float = 0.0
 
-    def __post_init__(self) -> None:
-        for name in ("length_m", "od_m"):
-            object.__setattr__(self, name, check_number(name, getattr(self, name)))
-        for name in ("id_m", "torsional_damping", "axial_damping", "torsional_retardation_s",
+    def _check(self) -> None:
+        for name in ("torsional_damping", "axial_damping", "torsional_retardation_s",
                      "axial_retardation_s"):
             object.__setattr__(self, name, check_number(name, getattr(self, name),
                                                         low_inclusive=True))
-        for name in ("shear_modulus_pa", "young_modulus_pa", "density_kg_m3"):
-            if getattr(self, name) is not None:
-                object.__setattr__(self, name, check_number(name, getattr(self, name)))
-        if self.id_m >= self.od_m:
-            raise ParameterError(f"id_m = {self.id_m!r} is out of range: expected < od_m")
-
-    @property
-    def polar_moment_m4(self) -> float:
-        return polar_moment_m4(self.od_m, self.id_m)
-
-    @property
-    def area_m2(self) -> float:
-        return area_m2(self.od_m, self.id_m)
 
 
 def pipe_sections(geometry: StringGeometry, torsional_damping: float = 0.0,
@@ -99,11 +80,13 @@ def pipe_sections(geometry: StringGeometry, torsional_damping: float = 0.0,
     rubs = well is not None and well.rubs
     return tuple(Section(x.length_m, x.od_m, x.id_m, torsional_damping, axial_damping,
                          geometry.torsional_retardation_time_s,
-                         geometry.axial_retardation_time_s, geometry.shear_modulus(x),
-                         geometry.young_modulus(x), geometry.density(x),
+                         geometry.axial_retardation_time_s,
                          tuple(geometry.wall_forces_n_m(i, STATION_FRACTIONS)) if rubs else (),
                          well.friction_static if rubs else 0.0,
-                         well.friction_dynamic if rubs else 0.0)
+                         well.friction_dynamic if rubs else 0.0,
+                         shear_modulus_pa=geometry.shear_modulus(x),
+                         young_modulus_pa=geometry.young_modulus(x),
+                         steel_density_kg_m3=geometry.density(x))
                  for i, x in enumerate(geometry.pipe()))
 
 
@@ -298,7 +281,7 @@ def string_waves(params: RigParameters, sections: tuple[Section, ...], h: float,
         z, delay, steps, frac, dash, rel, tau, eta, nu = [], [], [], [], [], [], [], [], []
         for sec in sections:
             modulus = getattr(sec, modulus_name) or default_modulus
-            rho = sec.density_kg_m3 or steel_density_kg_m3
+            rho = sec.steel_density_kg_m3 or steel_density_kg_m3
             speed = math.sqrt(modulus / rho)
             per_length = getattr(sec, damp)
             e = getattr(sec, retard) / ts

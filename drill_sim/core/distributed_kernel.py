@@ -44,24 +44,43 @@ from .kernel import (
     EVENT_MARGIN,
     MAX_SPLITS,
     _accumulate,
-    _drive_step,
+    _drive_advance,
+    _integral_end,
     _load_drive,
     _store_drive,
 )
 from .numba_cache import follow
+from .state_layout import (  # the distributed string's slots, after the lumped ones
+    A_DAMPED_AX,
+    A_DAMPED_ROT,
+    A_LOSS_AX,
+    A_LOSS_ROT,
+    A_WALL_AX,
+    A_WALL_ROT,
+    C_HOOK_POSITION,
+    C_TOP_ABSORB,
+    C_TOP_LEVEL,
+    C_TOP_T_MAX,
+    C_TOP_T_MIN,
+    C_V_BLOCK,
+    NOD,
+    O_F_BOTTOM,
+    O_F_TOP,
+    O_T_BOTTOM,
+    O_V_TOP,
+    X_A_PREV,
+    X_BHA_WALL_F,
+    X_BHA_WALL_T,
+    X_DOM,
+    X_DV,
+    X_F_BOTTOM,
+    X_F_TOP,
+    X_T_BOTTOM,
+    X_V_TOP,
+)
 
 follow(__file__, kn.__file__, bit_rock.__file__)   # the cache follows what it inlines
 
-# extra float state (after the lumped kernel's X_*, which keep their meaning; X_TS is the
-# surface torque at the top of the string)
-X_T_BOTTOM, X_F_BOTTOM, X_V_TOP, X_F_TOP, X_DOM, X_DV, X_A_PREV = range(kn.NX, kn.NX + 7)
-X_BHA_WALL_T, X_BHA_WALL_F = kn.NX + 7, kn.NX + 8    # the wall's torque [C], force [F*] on the BHA
-NXD = kn.NX + 9
-# extra accumulators: dashpot dissipation, torsional [C] and axial [F* L*]; the energy the
-# transport's weighting of two departures dissipates, likewise
-A_DAMPED_ROT, A_DAMPED_AX, A_LOSS_ROT, A_LOSS_AX, A_WALL_ROT, A_WALL_AX = range(kn.NA,
-                                                                              kn.NA + 6)
-NAD = kn.NA + 6                          # A_WALL_*: the wall's friction, dissipated likewise
 WALL_SWEEPS = 200                        # Gauss-Seidel sweeps at most (converged: 1e-11)
 NSCRATCH = 16                            # rows of ``advance``'s scratch (``_junctions_wall``)
 # the scratch's rows: arriving a and b (torsional, axial), the stations' speeds (torsional,
@@ -69,18 +88,6 @@ NSCRATCH = 16                            # rows of ``advance``'s scratch (``_jun
 # the sweeps go, as solved (2 each: torque, axial force)
 SC_TA, SC_TB, SC_AA, SC_AB, SC_WS, SC_WA = range(6)
 SC_FORCE, SC_NOW, SC_SOLVED = 10, 12, 14
-# extra output columns: pipe torque and force on the BHA, top axial speed and force
-O_T_BOTTOM, O_F_BOTTOM, O_V_TOP, O_F_TOP = range(kn.NO, kn.NO + 4)
-NOD = kn.NO + 4
-# extra commands: the hook's mode (0: force, the hook holds w0; 1: position, the drawworks
-# moves the block at C_V_BLOCK [L*/t*], positive down, and the string's top follows it)
-C_HOOK_POSITION, C_V_BLOCK = kn.NC, kn.NC + 1
-# the top reflecting nothing (kinematic mode only; 0: the speed imposed): it sends down the
-# torsional invariant C_TOP_LEVEL [C] whatever arrives, a torque source behind the top
-# section's own impedance, its torque held within [C_TOP_T_MIN, C_TOP_T_MAX] [C]
-# (``StringSimulator.absorb_at_top``)
-C_TOP_ABSORB, C_TOP_LEVEL, C_TOP_T_MIN, C_TOP_T_MAX = range(kn.NC + 2, kn.NC + 6)
-NCD = kn.NC + 6
 
 
 @njit(cache=True, inline="always")
@@ -261,9 +268,8 @@ def _bha_on_wall(delta, slope, regime, v, om, ts, fb, rate, n, lam, beta, hs, hp
 
 
 @njit(cache=True, inline="always")
-def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, abuf, aoff, an, az, ac, ar, aslot,
-                    om_top, om_bottom, v_top, v_bottom, w_static, w_dynamic, w_kappa, sigma,
-                    w_cols, stuck, sc):
+def _junctions_wall(torsion, tslot, axial, aslot, om_top, om_bottom, v_top, v_bottom, wall,
+                    stuck, sc):
     """``_junctions`` for both lines at once where the wall rubs: at each station the axial
     and the tangential sliding are one Coulomb contact (the friction against the resultant
     sliding velocity, at most mu n L_part; exact and set-valued: a station at rest stays there
@@ -290,10 +296,14 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, abuf, aoff, an, az, ac, a
     forces (SC_FORCE, SC_FORCE + 1; kept from step to step, the next step's first guess), their
     speeds as the sweeps go (SC_NOW ..) and as each contact's own solution last left them, rest
     exactly 0 (SC_SOLVED ..).
-    Inlined, with at most 30 arguments (a call of more is compiled as one with *args, which
-    is not inlined, and a call that is not inlined counts a reference to each of its arrays,
-    atomically, on every step: a third of field_a's step).
+    ``torsion``, ``axial``: the lines (``advance``), ``tslot``, ``aslot`` their slots; ``wall``
+    the wall's friction (``advance``). Inlined, with at most 30 arguments (a call of more is
+    compiled as one with *args, which is not inlined, and a call that is not inlined counts a
+    reference to each of its arrays, atomically, on every step: a third of field_a's step).
     Returns the dashpots' powers and the wall's, (torsional, axial, wall torsional, wall axial)."""
+    tz, tn, _, tc, tr, toff, tbuf, _, _ = torsion
+    az, an, _, ac, ar, aoff, abuf, _, _ = axial
+    w_static, w_dynamic, w_kappa, sigma, w_cols = wall
     m = tn.size
     tbuf[toff[0] + tslot[0]] = sc[SC_TB, 0] + 2.0 * tz[0] * om_top
     abuf[aoff[0] + aslot[0]] = sc[SC_AB, 0] + 2.0 * az[0] * v_top
@@ -386,12 +396,24 @@ def _junctions_wall(tbuf, toff, tn, tz, tc, tr, tslot, abuf, aoff, an, az, ac, a
 # loop takes is reference-counted, atomically, on each step, a fifth of a step without the
 # wall and a third with it (field_a)
 @njit(cache=True, _nrt=False)
-def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, az, an, af, ac,
-            ar, aoff, abuf, alp, astate, scratch, slots, w_static, w_dynamic, w_kappa, sigma,
-            w_cols, stuck, n_steps, out, out_every, out_row):
+def advance(x, k, surf, p, c, acc, torsion, axial, wall, work, n_steps, out, out_every,
+            out_row):
     """Advance ``n_steps`` steps; rows every ``out_every`` steps (the lumped kernel's columns,
     then O_T_BOTTOM.. if ``out`` has them); return the next free row. A step that would turn
-    the bit more than a sector is refused (K_REFUSED = 1), as in the lumped kernel."""
+    the bit more than a sector is refused (K_REFUSED = 1), as in the lumped kernel.
+
+    Parameters: the lumped kernel's arrays (``x`` .. ``acc``, sized for the distributed
+    string: ``state_layout``); ``torsion`` and ``axial``, each line as the tuple (z: the
+    segments' impedances, n: their slots per direction N + 1, f: the travel time's fraction,
+    c: the dashpots, rel: the relative dashpots, off: the buffers' offsets, buf: the ring
+    buffers, lowpass: the material low-passes' gains, state: their states); ``wall`` the
+    wall's friction at the stations and the BHA (static and sliding capacities, kappa, sigma,
+    the junctions' inverse ``wall_columns``); ``work`` the rig's own work arrays (the
+    scratch, the slots each segment reads next, the stations held by the wall)."""
+    tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate = torsion
+    az, an, af, ac, ar, aoff, abuf, alp, astate = axial
+    w_static, w_dynamic, w_kappa, sigma, w_cols = wall
+    scratch, slots, stuck = work
     n, lam, beta, h, psi = p[kn.P_N], p[kn.P_LAM], p[kn.P_BETA], p[kn.P_H], p[kn.P_PSI]
     inv_dth, dth = p[kn.P_INV_DTHETA], p[kn.P_DTHETA]
     w0, om0, v_min = c[kn.C_W0], c[kn.C_OMEGA0], c[kn.C_V_MIN]
@@ -453,11 +475,9 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
         # unless the drawworks' speed limit holds it, or (position) the block's speed
         om_top, integral_m, om_td_new, tm_new, ref_new, t_bar = om0, integral, om0, tm, ref, tm
         if drive:
-            if mode == kn.MODE_SPEED:
-                integral_m = integral + 0.5 * h * ki * (om0 - om_td)
-            om_td_new, tm_new, ref_new, t_bar = _drive_step(
-                mode, om_td, integral_m, tm, ref, tb_in[0] + z_top * om_td, om0, t_cmd,
-                rate_step, hj_top, kp, t_min, t_max, c_end, c_mean)
+            integral_m, om_td_new, tm_new, ref_new, t_bar = _drive_advance(
+                mode, om_td, integral, tm, ref, tb_in[0] + z_top * om_td, om0, t_cmd, 0.5 * h,
+                ki, rate_step, hj_top, kp, t_min, t_max, c_end, c_mean)
             om_top = 0.5 * (om_td + om_td_new)
         elif absorb:                       # the drive's inertia turned to reflect nothing
             om_td_new = (level - tb_in[0]) / (2.0 * z_top)     # by the step's end
@@ -539,8 +559,7 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
         # the string: reflections at the BHA, junctions, the top
         if rubs:
             pt, pa, fw_t, fw_a = _junctions_wall(
-                tbuf, toff, tn, tz, tc, tr, tslot, abuf, aoff, an, az, ac, ar, aslot, om_top,
-                om_int / h, v_top, v_int / h, w_static, w_dynamic, w_kappa, sigma, w_cols, stuck,
+                torsion, tslot, axial, aslot, om_top, om_int / h, v_top, v_int / h, wall, stuck,
                 scratch)
             damp_r += h * pt
             damp_a += h * pa
@@ -561,8 +580,8 @@ def advance(x, k, surf, p, c, acc, tz, tn, tf, tc, tr, toff, tbuf, tlp, tstate, 
         if drive:
             a_tm += h * t_bar
             a_wm += h * t_bar * om_top
-            if mode == kn.MODE_SPEED:          # the integral term, held within the limits
-                integral = min(max(integral_m + 0.5 * h * ki * (om0 - om_td_new), t_min), t_max)
+            integral = _integral_end(mode, integral, integral_m, 0.5 * h, ki, om0, om_td_new,
+                                     t_min, t_max)
             om_td, tm, ref = om_td_new, tm_new, ref_new
         elif absorb:
             a_tm += h * t_bar

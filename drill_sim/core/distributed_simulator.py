@@ -15,10 +15,11 @@ import math
 import numpy as np
 
 from . import distributed_kernel as dk
-from . import kernel as kn
-from .distributed import StringWaves, WaveLine
-from .parameters import Groups, ParameterError, check_number
+from . import state_layout as sl
+from .distributed import StringWaves, WaveLine, geometry_waves
+from .parameters import Groups, ParameterError, RigParameters, Scales, check_number
 from .simulator import Simulator
+from .string_geometry import StringGeometry
 from .top_drive import DriveGroups
 
 
@@ -42,6 +43,15 @@ class _Line:
         self.lowpass = np.ascontiguousarray(np.vstack([(1.0 - r) / (1.0 + r), 2.0 * r / (1.0 + r)]))
         self.off = np.concatenate([[0], np.cumsum(2 * self.n)[:-1]]).astype(np.int64)
         self.buf = np.zeros(int(2 * self.n.sum()))
+
+    FIXED = ("z", "n", "f", "c", "rel", "off")        # what running does not change
+    OWN = ("buf", "state")                            # a rig's own: its waves, its low-passes
+
+    def kernel_args(self) -> tuple:
+        """The line as ``distributed_kernel.advance`` takes it: (z, n, f, c, rel, off, buf,
+        lowpass, state)."""
+        return (self.z, self.n, self.f, self.c, self.rel, self.off, self.buf, self.lowpass,
+                self.state)
 
     def fill_steady(self, force: float, speed: float, wall: np.ndarray | None = None) -> float:
         """Every segment carrying ``force`` at the BHA plus the dashpots below it, at
@@ -105,6 +115,11 @@ class StringSimulator(Simulator):
     ``drive``: the top drive (default kinematic), whose inertia is the string's top boundary
     in speed and torque mode (``distributed_kernel``)."""
 
+    MODEL = sl.DISTRIBUTED
+    # the lines' waves and low-passes, the wall's contact forces (scratch) and held stations
+    STATE_ARRAYS = (*Simulator.STATE_ARRAYS, "torsion.buf", "torsion.state", "axial.buf",
+                    "axial.state", "scratch", "stuck")
+
     def __init__(self, groups: Groups, waves: StringWaves, *, stick_window: float = 4 * math.pi,
                  hoist_speed_limit: float = math.inf, nodes: int | None = None,
                  drive: DriveGroups | None = None) -> None:
@@ -122,7 +137,35 @@ class StringSimulator(Simulator):
         self._stuck = (self._wall[0] > 0.0).astype(np.int64)     # at rest: held
         super().__init__(groups, waves.h, stick_window=stick_window,
                          hoist_speed_limit=hoist_speed_limit, nodes=nodes, drive=drive)
-        self._c = np.concatenate([self._c, np.zeros(dk.NCD - self._c.size)])
+
+    @classmethod
+    def for_rig(cls, params: RigParameters, geometry: StringGeometry | None, dt: float,
+                drive: DriveGroups) -> StringSimulator:
+        """The distributed string of ``params`` and the pipe ``geometry`` at step ``dt`` [t*]."""
+        if geometry is None:
+            raise ParameterError("string_model = 'distributed' needs geometry: the preset's "
+                                 "string (a StringGeometry); a preset with 'lumped' has none")
+        return cls(params.groups, geometry_waves(params, geometry, dt), drive=drive)
+
+    def carried_to(self, groups: Groups, dt: float, drive: DriveGroups, old: Scales,
+                   new: Scales) -> Simulator:
+        raise ParameterError("replace_parameters: not available with string_model = "
+                             "'distributed' (its state is the pipe's wave buffers, which "
+                             "cannot be carried to new parameters); make a new Rig")
+
+    def _homes(self) -> dict[str, tuple[object, str]]:
+        homes = super()._homes()
+        for name, line in (("torsion", self._t), ("axial", self._a)):
+            homes |= {f"{name}.{attr}": (line, attr) for attr in (*_Line.FIXED, "buf",
+                                                                   "lowpass", "state")}
+        return homes | {"scratch": (self, "_scratch"), "slots": (self, "_slots"),
+                        "stuck": (self, "_stuck")}
+
+    def kernel_args(self) -> tuple:
+        """What ``distributed_kernel.advance`` takes after the lumped arrays: the torsional
+        and the axial line, the wall's friction, the rig's work arrays."""
+        return (self._t.kernel_args(), self._a.kernel_args(), self._wall,
+                (self._scratch, self._slots, self._stuck))
 
     # ---- the hook ------------------------------------------------------------------------
     def set_hook(self, position: bool, block_speed: float = 0.0) -> None:
@@ -130,7 +173,7 @@ class StringSimulator(Simulator):
         holds w0, ``set_commands``) or the block's motion (True: the top moves at
         ``block_speed`` [L*/t*], positive down, 0 held, whatever force that takes)."""
         speed = check_number("block speed", block_speed, low=None)
-        self._c[dk.C_HOOK_POSITION], self._c[dk.C_V_BLOCK] = float(bool(position)), speed
+        self._c[sl.C_HOOK_POSITION], self._c[sl.C_V_BLOCK] = float(bool(position)), speed
 
     def absorb_at_top(self, level: float | None, t_min: float = -math.inf,
                       t_max: float = math.inf) -> None:
@@ -143,7 +186,7 @@ class StringSimulator(Simulator):
         the caller's to hold, through ``level`` (the mean torque plus Z omega0 keeps omega0).
         None: the speed omega0 imposed again."""
         if level is None:
-            self._c[dk.C_TOP_ABSORB] = 0.0
+            self._c[sl.C_TOP_ABSORB] = 0.0
             return
         if self.drive.mode != "kinematic":
             raise ParameterError("absorb_at_top: expected the kinematic drive (the top's speed "
@@ -151,9 +194,9 @@ class StringSimulator(Simulator):
         lo = -math.inf if t_min == -math.inf else check_number("t_min", t_min, low=None)
         hi = math.inf if t_max == math.inf else check_number(
             "t_max", t_max, low=None if lo == -math.inf else lo)
-        self._c[dk.C_TOP_LEVEL] = check_number("level", level, low=None)
-        self._c[dk.C_TOP_T_MIN], self._c[dk.C_TOP_T_MAX] = lo, hi
-        self._c[dk.C_TOP_ABSORB] = 1.0
+        self._c[sl.C_TOP_LEVEL] = check_number("level", level, low=None)
+        self._c[sl.C_TOP_T_MIN], self._c[sl.C_TOP_T_MAX] = lo, hi
+        self._c[sl.C_TOP_ABSORB] = 1.0
 
     @property
     def top_impedance(self) -> float:
@@ -163,19 +206,13 @@ class StringSimulator(Simulator):
     @property
     def hook_position(self) -> bool:
         """The block holds the top (True) or the hook's force does (False)."""
-        return bool(self._c[dk.C_HOOK_POSITION])
+        return bool(self._c[sl.C_HOOK_POSITION])
 
     @property
     def top_force(self) -> float:
         """The force the string's top takes from the hook, counted as w0 is [F*]: the
         available weight; the hook carries W_s less it."""
-        return float(self._x[dk.X_F_TOP])
-
-    def _extend(self) -> None:
-        if self._x.size != dk.NXD:
-            self._x = np.concatenate([self._x, np.zeros(dk.NXD - self._x.size)])
-            self._acc = np.concatenate([self._acc, np.zeros(dk.NAD - self._acc.size)])
-            self._no_rows = np.zeros((0, dk.NOD))
+        return float(self._x[sl.X_F_TOP])
 
     # ---- starts --------------------------------------------------------------------------
     def start_steady(self, w0: float, omega0: float, perturbation: float = 0.0) -> None:
@@ -185,7 +222,6 @@ class StringSimulator(Simulator):
         the bit drills steadily under w0 less that (``steady_state``); BHA speed perturbed.
         A top drive in the loop turns at omega0 under the torque at the top of the string (its
         motor torque, PI integral term and torque command)."""
-        self._extend()
         w_bit = self._bit_weight(w0, omega0)
         super().start_steady(w_bit, omega0, perturbation)
         self.set_commands(w0, omega0)          # the hook holds the available weight
@@ -194,19 +230,19 @@ class StringSimulator(Simulator):
         wall_t, wall_a = self._wall_forces(st.v0, omega0)
         self._stuck[:] = 0                     # sliding everywhere
         self._scratch[:] = 0.0
-        x[kn.X_TS] = self._t.fill_steady(st.t0, omega0, wall_t)
+        x[sl.X_TS] = self._t.fill_steady(st.t0, omega0, wall_t)
         d = self.drive
-        if not d.holds(x[kn.X_TS]):
-            raise ParameterError(f"steady drilling needs a motor torque of {x[kn.X_TS]:.4g} C, "
+        if not d.holds(x[sl.X_TS]):
+            raise ParameterError(f"steady drilling needs a motor torque of {x[sl.X_TS]:.4g} C, "
                                  f"outside the drive's limits [{d.t_min:.4g}, {d.t_max:.4g}] C")
-        x[kn.X_TM] = x[kn.X_TREF] = x[kn.X_DRIVE_I] = self._c[kn.C_T_CMD] = x[kn.X_TS]
-        x[dk.X_F_TOP] = self._a.fill_steady(w_bit, st.v0, wall_a)
-        x[kn.X_PHI_TD] = self._twist(st.t0, omega0, wall_t)
-        x[dk.X_T_BOTTOM], x[dk.X_F_BOTTOM], x[dk.X_V_TOP] = st.t0, w_bit, st.v0
-        x[dk.X_DOM] = x[dk.X_DV] = 0.0
-        x[dk.X_A_PREV] = self._t.buf[self._t.off[-1]]
+        x[sl.X_TM] = x[sl.X_TREF] = x[sl.X_DRIVE_I] = self._c[sl.C_T_CMD] = x[sl.X_TS]
+        x[sl.X_F_TOP] = self._a.fill_steady(w_bit, st.v0, wall_a)
+        x[sl.X_PHI_TD] = self._twist(st.t0, omega0, wall_t)
+        x[sl.X_T_BOTTOM], x[sl.X_F_BOTTOM], x[sl.X_V_TOP] = st.t0, w_bit, st.v0
+        x[sl.X_DOM] = x[sl.X_DV] = 0.0
+        x[sl.X_A_PREV] = self._t.buf[self._t.off[-1]]
         if wall_t is not None:                 # the BHA's contact, sliding
-            x[dk.X_BHA_WALL_T], x[dk.X_BHA_WALL_F] = wall_t[-1], wall_a[-1]
+            x[sl.X_BHA_WALL_T], x[sl.X_BHA_WALL_F] = wall_t[-1], wall_a[-1]
 
     def _wall_forces(self, v: float, omega: float) -> tuple[np.ndarray | None, ...]:
         """The wall's sliding friction at each station (torque [C], force [F*]), or Nones."""
@@ -252,28 +288,24 @@ class StringSimulator(Simulator):
     def start_at_rest(self, gap: float = 0.0) -> None:
         """Bit at rest ``gap`` [L*] above a flat bottom, string relaxed and hanging in static
         equilibrium (the hook carries the weight), commands zero."""
-        self._extend()
         super().start_at_rest(gap)
         for line in (self._t, self._a):
             line.buf[:] = 0.0
             line.state[:] = 0.0
         self._stuck[:] = self._wall[0] > 0.0    # at rest against the wall
         self._scratch[:] = 0.0
-        self._x[kn.NX:] = 0.0
+        self._x[sl.NX:] = 0.0
 
-    def load_state(self, **_: object) -> None:
-        raise ParameterError("load_state: a distributed string's state is its wave buffers; "
-                             "only start_steady and start_at_rest are supported")
+    def place(self, state: object, *, steps: int, surface: np.ndarray) -> None:
+        raise ParameterError("place: a distributed string's state is its wave buffers, not a "
+                             "physical placement; start it (start_steady, start_at_rest) or "
+                             "load a saved state (save_state, load_state)")
 
     # ---- stepping ------------------------------------------------------------------------
     def advance_into(self, n_steps: int, out: np.ndarray, every: int, row: int) -> int:
-        t, a = self._t, self._a
         row = int(dk.advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
-                             t.z, t.n, t.f, t.c, t.rel, t.off, t.buf, t.lowpass, t.state, a.z,
-                             a.n, a.f, a.c, a.rel, a.off, a.buf, a.lowpass, a.state,
-                             self._scratch, self._slots, *self._wall, self._stuck, n_steps,
-                             out, every, row))
-        if self._k[kn.K_REFUSED]:
+                             *self.kernel_args(), n_steps, out, every, row))
+        if self._k[sl.K_REFUSED]:
             self._refuse_step()
         return row
 
@@ -284,7 +316,7 @@ class StringSimulator(Simulator):
         """Rows (kernel.O_* then distributed_kernel.O_T_BOTTOM..) every ``output_interval``."""
         n_total = round(duration / self.dt)
         every = max(1, round(output_interval / self.dt))
-        out = np.empty((n_total // every, dk.NOD))
+        out = np.empty((n_total // every, sl.NOD))
         self.start_sample()
         row = self.advance_into(n_total, out, every, 0)
         return out[:row]
@@ -293,27 +325,27 @@ class StringSimulator(Simulator):
     @property
     def bottom_torque(self) -> float:
         """The pipe's torque on the BHA over the last step [C]."""
-        return float(self._x[dk.X_T_BOTTOM])
+        return float(self._x[sl.X_T_BOTTOM])
 
     def energy(self) -> tuple[float, float]:
         """Stored energy (torsional [C], axial [F* L*]): string waves plus the BHA's kinetic
         energy (I = 1; M = 1/psi in these units) plus, with a top drive in the loop, the
         drive's, j Omega_TD^2 / 2 (and with the top absorbing, ``absorb_at_top``)."""
         x = self._x
-        turns = self.drive.mode != "kinematic" or self._c[dk.C_TOP_ABSORB] != 0.0
-        drive = 0.5 * self.drive.j * x[kn.X_OMEGA_TD] ** 2 if turns else 0.0
-        return (self._t.energy(self.dt, self.steps) + 0.5 * x[kn.X_OMEGA] ** 2 + drive,
-                self._a.energy(self.dt, self.steps) + 0.5 * x[kn.X_V] ** 2 / self.groups.psi)
+        turns = self.drive.mode != "kinematic" or self._c[sl.C_TOP_ABSORB] != 0.0
+        drive = 0.5 * self.drive.j * x[sl.X_OMEGA_TD] ** 2 if turns else 0.0
+        return (self._t.energy(self.dt, self.steps) + 0.5 * x[sl.X_OMEGA] ** 2 + drive,
+                self._a.energy(self.dt, self.steps) + 0.5 * x[sl.X_V] ** 2 / self.groups.psi)
 
     def damped(self) -> tuple[float, float]:
         """Energy the pipe's damping (dashpots, viscous and material) dissipated over the
         window (torsional [C], axial [F* L*])."""
-        return float(self._acc[dk.A_DAMPED_ROT]), float(self._acc[dk.A_DAMPED_AX])
+        return float(self._acc[sl.A_DAMPED_ROT]), float(self._acc[sl.A_DAMPED_AX])
 
     def wall_friction(self) -> tuple[float, float]:
         """Energy the wall's friction dissipated over the window (torsional [C], axial
         [F* L*])."""
-        return float(self._acc[dk.A_WALL_ROT]), float(self._acc[dk.A_WALL_AX])
+        return float(self._acc[sl.A_WALL_ROT]), float(self._acc[sl.A_WALL_AX])
 
     @property
     def wall_held(self) -> np.ndarray:
@@ -325,7 +357,7 @@ class StringSimulator(Simulator):
         """Energy the transport's weighting of two departures (a fractional travel time)
         dissipated over the window (torsional [C], axial [F* L*]): second order in h for
         smooth waves, O(h) per passage of a jump (a stick, a landing)."""
-        return float(self._acc[dk.A_LOSS_ROT]), float(self._acc[dk.A_LOSS_AX])
+        return float(self._acc[sl.A_LOSS_ROT]), float(self._acc[sl.A_LOSS_AX])
 
 
 def line_c_last(waves: StringWaves) -> float:

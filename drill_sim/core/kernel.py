@@ -52,62 +52,97 @@ from .bit_rock import (  # the bit on the rock, shared
     _sweep,
 )
 from .numba_cache import follow
+from .state_layout import (  # the layout of the state arrays, one declaration
+    A_BOUNCE_TIME,
+    A_DISSIPATED_AX,
+    A_DISSIPATED_ROT,
+    A_OMEGA,
+    A_OMEGA0,
+    A_OMEGA_MAX,
+    A_OMEGA_MIN,
+    A_OMEGA_TD,
+    A_STICK_TIME,
+    A_T,
+    A_TIME,
+    A_TM,
+    A_TS,
+    A_V,
+    A_W,
+    A_W0,
+    A_WORK_HOIST,
+    A_WORK_MOTOR,
+    A_WORK_TOP_DRIVE,
+    A_WORK_WEIGHT,
+    C_OMEGA0,
+    C_T_CMD,
+    C_V_MIN,
+    C_W0,
+    K_LAST,
+    K_REFUSED,
+    K_REGIME,
+    K_SAMPLED,
+    K_STEPS,
+    O_DELTA,
+    O_G,
+    O_OMEGA,
+    O_OMEGA0,
+    O_OMEGA_TD,
+    O_PHI,
+    O_PHI_TD,
+    O_REGIME,
+    O_T,
+    O_TAU,
+    O_TM,
+    O_TS,
+    O_U,
+    O_V,
+    O_W,
+    O_W0,
+    P_BETA,
+    P_DTHETA,
+    P_H,
+    P_INV_DTHETA,
+    P_J,
+    P_KI,
+    P_KP,
+    P_LAG,
+    P_LAG_END,
+    P_LAG_MEAN,
+    P_LAM,
+    P_MODE,
+    P_N,
+    P_PSI,
+    P_RATE,
+    P_T_MAX,
+    P_T_MIN,
+    X_DELTA,
+    X_DRIVE_I,
+    X_G,
+    X_HOLE,
+    X_OMEGA,
+    X_OMEGA_TD,
+    X_PHI,
+    X_PHI_TD,
+    X_S_BEHIND,
+    X_SINCE_STICK,
+    X_SUM_T,
+    X_SUM_W,
+    X_T,
+    X_TAU,
+    X_TM,
+    X_TREF,
+    X_TS,
+    X_U,
+    X_V,
+    X_W,
+)
 
 follow(__file__, bit_rock.__file__)       # this file's cache follows the laws it inlines
-
-# float state x
-X_TAU, X_U, X_V, X_PHI, X_OMEGA, X_PHI_TD = 0, 1, 2, 3, 4, 5
-X_S_BEHIND = 6      # surface value of the last node passed, from before this pass
-X_SINCE_STICK = 7   # time since the bit was last stuck [t*]
-X_W, X_T = 8, 9     # weight and torque on bit during the last step [F*], [C]
-X_TS = 10           # string torque phi_td - phi at the end of the last step [C]
-X_DELTA = 11        # depth of cut per blade during the last step [L*]
-X_G = 12            # wear-flat contact factor during the last step [-]
-X_HOLE = 13         # deepest point of the rock surface, max of S [L*]
-X_SUM_W, X_SUM_T = 14, 15   # sums of w and t over the steps since the last sample (an output
-                            # row or a read of the sums); the window's A_W, A_T exclude them
-X_OMEGA_TD = 16     # top-drive speed [1/t*] (kinematic mode: omega0)
-X_DRIVE_I = 17      # the speed PI's integral term [C]
-X_TM = 18           # motor torque at the end of the last step, after limits and lag [C]
-X_TREF = 19         # the drive's reference after rate limit and saturation (the lag's input) [C]
-NX = 20
-
-# integer state k
-K_LAST = 0          # absolute index of the last surface node the blades passed
-K_REGIME = 1        # REGIME_* of the last step
-K_STEPS = 2         # steps taken since the start
-K_SAMPLED = 3       # K_STEPS at the last sample (X_SUM_* cover the steps since)
-K_REFUSED = 4       # 1 if the last call stopped before a step turning the bit over a sector
-NK = 5
 
 MODE_KINEMATIC, MODE_SPEED, MODE_TORQUE = 0, 1, 2   # the top drive's (top_drive.MODES)
 
 EVENT_MARGIN = 1e-9     # a switch closer than this (fraction of the step) to its ends is not split
 MAX_SPLITS = 2          # switches located per step
-
-# parameters p; the top drive's (P_MODE on) as top_drive.DriveGroups, P_LAG_END and
-# P_LAG_MEAN its lag weights over a whole step
-P_N, P_PSI, P_LAM, P_BETA, P_H, P_DTHETA, P_INV_DTHETA = range(7)
-(P_MODE, P_J, P_T_MAX, P_T_MIN, P_RATE, P_LAG, P_KP, P_KI, P_LAG_END,
- P_LAG_MEAN) = range(7, 17)
-NP = 17
-
-# commands c (zero-order hold between calls); C_OMEGA0 is the drive's set-point in speed mode
-C_W0, C_OMEGA0, C_V_MIN = 0, 1, 2   # C_V_MIN: lowest axial velocity (hoisting-speed limit)
-C_T_CMD = 3                         # motor torque command, torque mode [C]
-NC = 4
-
-# accumulators a, integrals over the metrics window (A_W, A_T up to the last sample: add
-# h X_SUM_W, h X_SUM_T for the window's integrals)
-(A_TIME, A_OMEGA, A_OMEGA_MIN, A_OMEGA_MAX, A_W, A_T, A_TS, A_V, A_STICK_TIME, A_BOUNCE_TIME,
- A_WORK_TOP_DRIVE, A_WORK_WEIGHT, A_WORK_HOIST, A_DISSIPATED_ROT, A_DISSIPATED_AX,
- A_W0, A_OMEGA0, A_OMEGA_TD, A_TM, A_WORK_MOTOR) = range(20)
-NA = 20     # A_WORK_TOP_DRIVE: work of the string's top torque; A_WORK_MOTOR: of the motor
-
-# output columns (O_W, O_T: means over the steps since the previous sample or row)
-(O_TAU, O_U, O_V, O_PHI, O_OMEGA, O_PHI_TD, O_W, O_T, O_TS, O_DELTA, O_REGIME, O_W0, O_OMEGA0,
- O_G, O_OMEGA_TD, O_TM) = range(16)
-NO = 16     # O_TM: motor torque (kinematic mode: the string torque, which imposes omega0)
 
 
 @njit(cache=True, inline="always")
@@ -138,6 +173,37 @@ def _drive_step(mode, om_td, integral, tm, ref, ts, om_set, t_cmd, step, hj, kp,
             r = min(max(r, lo), hi)
             om_new = om_td + hj * (c_mean * r + other)
     return om_new, tm + c_end * (r - tm), r, tm + c_mean * (r - tm)
+
+
+@njit(cache=True, inline="always")
+def _drive_advance(mode, om_td, integral, tm, ref, ts, om_set, t_cmd, h2, ki, step, hj, kp,
+                   t_lo, t_hi, c_end, c_mean):
+    """The top drive over one step from its state (``h2`` half the step): the speed PI's
+    integral term at the midpoint (speed mode), then ``_drive_step``; returns (the integral
+    term at the midpoint, Omega_TD+, T_m+, reference+, mean T_m). The lumped and the
+    distributed kernel both step their drive here."""
+    integral_m = integral
+    if mode == MODE_SPEED:
+        integral_m = integral + h2 * ki * (om_set - om_td)
+    om_new, tm_new, ref_new, t_bar = _drive_step(mode, om_td, integral_m, tm, ref, ts, om_set,
+                                                 t_cmd, step, hj, kp, t_lo, t_hi, c_end, c_mean)
+    return integral_m, om_new, tm_new, ref_new, t_bar
+
+
+@njit(cache=True, inline="always")
+def _integral_end(mode, integral, integral_m, h2, ki, om_set, om_new, t_lo, t_hi):
+    """The speed PI's integral term at the step's end, held within the torque limits (other
+    modes: ``integral`` unchanged)."""
+    if mode == MODE_SPEED:
+        return min(max(integral_m + h2 * ki * (om_set - om_new), t_lo), t_hi)
+    return integral
+
+
+@njit(cache=True, inline="always")
+def _drive_books(hs, ts, t_bar, om_td_bar, a_tm, a_wm, a_wtd):
+    """The drive's window integrals over a step (or part) ``hs``: the motor torque, the
+    motor's work and the string's top torque's work; returns them updated."""
+    return a_tm + hs * t_bar, a_wm + hs * t_bar * om_td_bar, a_wtd + hs * ts * om_td_bar
 
 
 @njit(cache=True, inline="always")
@@ -247,11 +313,9 @@ def _located_step(x, k, surf, p, c, acc, event):
             if lag > 0.0:
                 c_end = -math.expm1(-hs / lag)
                 c_mean = 1.0 - c_end * lag / hs
-            if mode == MODE_SPEED:
-                integral_m = integral + h2 * ki * (om0 - om_td)
-            om_td_new, tm_new, ref_new, t_bar = _drive_step(
-                mode, om_td, integral_m, tm, ref, ts, om0, t_cmd, rate * hs, hs / j_td, kp, t_min,
-                t_max, c_end, c_mean)
+            integral_m, om_td_new, tm_new, ref_new, t_bar = _drive_advance(
+                mode, om_td, integral, tm, ref, ts, om0, t_cmd, h2, ki, rate * hs, hs / j_td, kp,
+                t_min, t_max, c_end, c_mean)
             om_td_bar = 0.5 * (om_td + om_td_new)
         s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
         delta_new = u_m - s_m
@@ -276,11 +340,9 @@ def _located_step(x, k, surf, p, c, acc, event):
         sum_t += t * (hs / h)
         u, v, phi, om, ptd = u_new, v_new, phi_new, om_new, ptd_m + h2 * om_td_new
         if drive:               # (A_OMEGA_TD: _steps books the top drive's turn)
-            a_tm += hs * t_bar
-            a_wm += hs * t_bar * om_td_bar
-            a_wtd += hs * ts * om_td_bar
-            if mode == MODE_SPEED:
-                integral = min(max(integral_m + h2 * ki * (om0 - om_td_new), t_min), t_max)
+            a_tm, a_wm, a_wtd = _drive_books(hs, ts, t_bar, om_td_bar, a_tm, a_wm, a_wtd)
+            integral = _integral_end(mode, integral, integral_m, h2, ki, om0, om_td_new, t_min,
+                                     t_max)
             om_td, tm, ref = om_td_new, tm_new, ref_new
         tau += hs
         if om < a_om_min:
@@ -392,11 +454,9 @@ def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
         om_td_bar = om_td
         integral_m, tm_new, ref_new, t_bar = integral, tm, ref, tm
         if drive:
-            if mode == MODE_SPEED:
-                integral_m = integral + h2 * ki * (om0 - om_td)
-            om_td_new, tm_new, ref_new, t_bar = _drive_step(
-                mode, om_td, integral_m, tm, ref, ts, om0, t_cmd, rate_step, hj, kp, t_min, t_max,
-                c_end, c_mean)
+            integral_m, om_td_new, tm_new, ref_new, t_bar = _drive_advance(
+                mode, om_td, integral, tm, ref, ts, om0, t_cmd, h2, ki, rate_step, hj, kp, t_min,
+                t_max, c_end, c_mean)
             om_td_bar = 0.5 * (om_td + om_td_new)
         # 2. depth of cut on the surface left by earlier passes
         s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
@@ -455,11 +515,9 @@ def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
             om = om_new
             ptd = ptd_m + h2 * om_td_new
             if drive:
-                a_tm += h * t_bar
-                a_wm += h * t_bar * om_td_bar
-                a_wtd += h * ts * om_td_bar
-                if mode == MODE_SPEED:      # the integral term, held within the torque limits
-                    integral = min(max(integral_m + h2 * ki * (om0 - om_td_new), t_min), t_max)
+                a_tm, a_wm, a_wtd = _drive_books(h, ts, t_bar, om_td_bar, a_tm, a_wm, a_wtd)
+                integral = _integral_end(mode, integral, integral_m, h2, ki, om0, om_td_new,
+                                         t_min, t_max)
                 om_td = om_td_new
                 tm = tm_new
                 ref = ref_new

@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from . import kernel as kn
+from . import state_layout as sl
 from .parameters import Scales
 from .stick_slip import severity_index
 
@@ -47,33 +47,33 @@ class Metrics:
 
     @classmethod
     def from_accumulators(cls, acc: np.ndarray) -> Metrics:
-        time = acc[kn.A_TIME]
+        time = acc[sl.A_TIME]
         if time <= 0.0:
             nan = math.nan
             return cls(0.0, *([nan] * 20))
-        mean_omega = acc[kn.A_OMEGA] / time
+        mean_omega = acc[sl.A_OMEGA] / time
         return cls(
             duration=time,
-            ssi=severity_index(acc[kn.A_OMEGA_MAX], acc[kn.A_OMEGA_MIN], mean_omega),
-            stick_fraction=acc[kn.A_STICK_TIME] / time,
-            bounce_fraction=acc[kn.A_BOUNCE_TIME] / time,
+            ssi=severity_index(acc[sl.A_OMEGA_MAX], acc[sl.A_OMEGA_MIN], mean_omega),
+            stick_fraction=acc[sl.A_STICK_TIME] / time,
+            bounce_fraction=acc[sl.A_BOUNCE_TIME] / time,
             mean_bit_speed=mean_omega,
-            min_bit_speed=acc[kn.A_OMEGA_MIN],
-            max_bit_speed=acc[kn.A_OMEGA_MAX],
-            mean_wob=acc[kn.A_W] / time,
-            mean_tob=acc[kn.A_T] / time,
-            mean_surface_torque=acc[kn.A_TS] / time,
-            mean_rop=acc[kn.A_V] / time,
-            mean_w0=acc[kn.A_W0] / time,
-            mean_omega0=acc[kn.A_OMEGA0] / time,
-            work_top_drive=acc[kn.A_WORK_TOP_DRIVE],
-            dissipated_rotation=acc[kn.A_DISSIPATED_ROT],
-            work_weight=acc[kn.A_WORK_WEIGHT],
-            work_hoist=acc[kn.A_WORK_HOIST],
-            dissipated_axial=acc[kn.A_DISSIPATED_AX],
-            mean_top_drive_speed=acc[kn.A_OMEGA_TD] / time,
-            mean_motor_torque=acc[kn.A_TM] / time,
-            work_motor=acc[kn.A_WORK_MOTOR],
+            min_bit_speed=acc[sl.A_OMEGA_MIN],
+            max_bit_speed=acc[sl.A_OMEGA_MAX],
+            mean_wob=acc[sl.A_W] / time,
+            mean_tob=acc[sl.A_T] / time,
+            mean_surface_torque=acc[sl.A_TS] / time,
+            mean_rop=acc[sl.A_V] / time,
+            mean_w0=acc[sl.A_W0] / time,
+            mean_omega0=acc[sl.A_OMEGA0] / time,
+            work_top_drive=acc[sl.A_WORK_TOP_DRIVE],
+            dissipated_rotation=acc[sl.A_DISSIPATED_ROT],
+            work_weight=acc[sl.A_WORK_WEIGHT],
+            work_hoist=acc[sl.A_WORK_HOIST],
+            dissipated_axial=acc[sl.A_DISSIPATED_AX],
+            mean_top_drive_speed=acc[sl.A_OMEGA_TD] / time,
+            mean_motor_torque=acc[sl.A_TM] / time,
+            work_motor=acc[sl.A_WORK_MOTOR],
         )
 
     def as_dict(self) -> dict[str, float]:

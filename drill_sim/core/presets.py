@@ -115,7 +115,7 @@ def preset_from_dict(name: str, data: object) -> Preset:
     )
 
 
-_SECTION_KEYS = tuple(f.name for f in fields(StringSection))
+_SECTION_KEYS = StringSection.keys()
 
 
 _WELL_KEYS = ("survey", "friction_static", "friction_dynamic", "formations")

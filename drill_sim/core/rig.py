@@ -10,17 +10,23 @@ import math
 from bisect import bisect_right
 from dataclasses import replace
 
-from . import kernel as kn
-from .distributed import check_string_model, geometry_waves
+import numpy as np
+
+from . import state_layout as sl
+from .distributed import check_string_model
 from .distributed_simulator import StringSimulator
 from .parameters import ParameterError, RigParameters, check_number
 from .resolution import STEPS_PER_PERIOD, fastest_period, max_step, resolves
-from .rig_sample import RigSample
+from .rig_sample import REGIME_OFF_BOTTOM, REGIME_STUCK, RigSample
+from .rig_step import NR, mean_forces, sample_into, scale_row, surface_commands
 from .simulator import DEFAULT_DT, Simulator
 from .stability import NoSteadyDrilling, SteadyState
 from .string_geometry import StringGeometry
 from .top_drive import DriveGroups, TopDriveParameters
 from .well import ROCK
+
+# the string models' simulators, by name (``Simulator``'s contract)
+SIMULATORS: dict[str, type[Simulator]] = {cls.MODEL: cls for cls in (Simulator, StringSimulator)}
 
 
 def _check_step(dt_s: float, params: RigParameters, top_drive: TopDriveParameters) -> None:
@@ -62,6 +68,8 @@ class Rig:
         dt = DEFAULT_DT if dt_s is None else check_number("dt_s", dt_s) / ts
         _check_step(dt * ts, params, self.top_drive)
         self.sim = self._simulator(dt, geometry)
+        self._scale_row = scale_row(params, self.dt_s)     # the SI arithmetic's (rig_step)
+        self._sample_row = np.zeros(NR)
         self.geometry = geometry               # the pipe of the distributed string
         self._torque_nm = 0.0
         self.set_stick_window(4.0 * math.pi * ts if stick_window_s is None else stick_window_s)
@@ -79,14 +87,9 @@ class Rig:
         self._forget_samples()
 
     def _simulator(self, dt: float, geometry: StringGeometry | None) -> Simulator:
-        """The lumped ``Simulator`` or, for the distributed model, a ``StringSimulator``."""
-        if self.string_model == "lumped":
-            return Simulator(self.groups, dt, drive=self._drive_groups(self.params, self.top_drive))
-        if geometry is None:
-            raise ParameterError("string_model = 'distributed' needs geometry: the preset's "
-                                 "string (a StringGeometry); a preset with 'lumped' has none")
-        return StringSimulator(self.groups, geometry_waves(self.params, geometry, dt),
-                               drive=self._drive_groups(self.params, self.top_drive))
+        """The string model's simulator (``SIMULATORS``) of these parameters and pipe."""
+        return SIMULATORS[self.string_model].for_rig(
+            self.params, geometry, dt, self._drive_groups(self.params, self.top_drive))
 
     # ---- conversions --------------------------------------------------------------------
     @property
@@ -94,10 +97,12 @@ class Rig:
         return self.sim.dt * self.scales.time_s
 
     def w0_of(self, hook_load_n: float) -> float:
-        return (self.params.submerged_weight_n - hook_load_n) / self.scales.force_n
+        """The available weight w0 [F*] of a hook load [N]."""
+        return surface_commands(0.0, hook_load_n, self._scale_row)[0]
 
     def omega0_of(self, speed_rad_s: float) -> float:
-        return speed_rad_s * self.scales.time_s
+        """The speed command omega0 [1/t*] of a top-drive speed [rad/s]."""
+        return surface_commands(speed_rad_s, 0.0, self._scale_row)[1]
 
     @staticmethod
     def _drive_groups(params: RigParameters, top_drive: TopDriveParameters) -> DriveGroups:
@@ -141,7 +146,7 @@ class Rig:
     @property
     def bit_measured_depth_m(self) -> float:
         """The bit's measured depth [m]: the string's length at the start plus its advance."""
-        return self._start_md_m + float(self.sim.live_state[kn.X_U]) * self.scales.length_m
+        return self._start_md_m + float(self.sim.live_state[sl.X_U]) * self.scales.length_m
 
     def _follow_formations(self, start_md_m: float | None = None) -> bool:
         """Enter the formation the bit is in, if it changed; True if it did. Deeper, each
@@ -182,15 +187,10 @@ class Rig:
                                  f"{', '.join(self.HOOK_MODES)}")
         speed = check_number("block_speed_m_s", block_speed_m_s, low=-10.0, high=10.0)
         sim = self.sim
-        if mode == "position" and not isinstance(sim, StringSimulator):
-            raise ParameterError("hook_mode = 'position' needs string_model = 'distributed': "
-                                 "the lumped string is axially rigid, so a block held still "
-                                 "would hold the bit; use hook_mode = 'force'")
-        if isinstance(sim, StringSimulator):
-            if mode == "force" and sim.hook_position:    # bumpless: hold what the hook carries
-                self._hook_load_n = self.measured_hook_load_n
-                sim.set_commands(self.w0_of(self._hook_load_n), sim.commands[1])
-            sim.set_hook(mode == "position", speed / self.scales.velocity_m_s)
+        if mode == "force" and sim.hook_position:    # bumpless: hold what the hook carries
+            self._hook_load_n = self.measured_hook_load_n
+            sim.set_commands(self.w0_of(self._hook_load_n), sim.commands[1])
+        sim.set_hook(mode == "position", speed / self.scales.velocity_m_s)
         self.hook_mode, self.block_speed_m_s = mode, speed
 
     @property
@@ -198,10 +198,10 @@ class Rig:
         """The hook load the string's top takes now [N]: W_s less the top's force. With the
         hook in force mode this is the commanded load (except while the hoisting speed limit
         holds the string); the lumped string has no top force of its own: the command."""
-        sim = self.sim
-        if not isinstance(sim, StringSimulator):
+        top = self.sim.top_force
+        if top is None:
             return self._hook_load_n
-        return self.params.submerged_weight_n - sim.top_force * self.scales.force_n
+        return self.params.submerged_weight_n - top * self.scales.force_n
 
     def set_stick_window(self, window_s: float) -> None:
         """How long the stick-slip flag stays up after the bit was last stuck [s]."""
@@ -216,36 +216,18 @@ class Rig:
             raise ParameterError(f"blade_count cannot change while running "
                                  f"({self.params.blade_count} -> {params.blade_count}): "
                                  "it changes the rock surface's sector; reset instead")
-        if self.string_model != "lumped":
-            raise ParameterError("replace_parameters: not available with string_model = "
-                                 "'distributed' (its state is the pipe's wave buffers, which "
-                                 "cannot be carried to new parameters); make a new Rig")
         _check_step(self.dt_s, params, self.top_drive)
         old, new = self.scales, params.scales
-        s = self.sim.state()
+        sim = self.sim.carried_to(params.groups, self.dt_s / new.time_s,
+                                  self._drive_groups(params, self.top_drive), old, new)
         sum_w, sum_t, n = self.sim.take_force_sums()     # carried over in SI to the next sample
         self._pending = (self._pending[0] + sum_w * old.force_n,
                          self._pending[1] + sum_t * old.stiffness_nm_per_rad, self._pending[2] + n)
-        sim = Simulator(params.groups, self.dt_s / new.time_s,
-                        drive=self._drive_groups(params, self.top_drive))
-        length = old.length_m / new.length_m
-        torque = old.stiffness_nm_per_rad / new.stiffness_nm_per_rad
-        sim.load_state(tau=s.tau * old.time_s / new.time_s, steps=self.sim.steps,
-                       u=s.u * length, v=s.v * old.velocity_m_s / new.velocity_m_s, phi=s.phi,
-                       omega=s.omega * new.time_s / old.time_s, phi_td=s.phi_td,
-                       surface=self.sim.surface * length,
-                       surface_behind=self.sim.surface_behind * length, regime=s.regime,
-                       since_stick=s.since_stick * old.time_s / new.time_s,
-                       w=s.w * old.force_n / new.force_n,
-                       t=s.t * torque, delta_n=s.delta_n * length, g=s.g,
-                       omega_td=s.omega_td * new.time_s / old.time_s,
-                       motor_torque=s.motor_torque * torque,
-                       drive_integral=s.drive_integral * torque,
-                       drive_reference=s.drive_reference * torque)
         # the rock: a value changed now holds until a formation gives it; the others stay
         rock = {n: float(getattr(params, n)) if getattr(params, n) != getattr(self.params, n)
                 else self.rock[n] for n in ROCK}
         self.params, self.scales, self.groups, self.sim = params, new, params.groups, sim
+        self._scale_row = scale_row(params, self.dt_s)
         self._cut(rock)
         self.set_stick_window(self.stick_window_s)
         self.set_hoist_speed_limit(self.hoist_speed_limit_m_s)
@@ -257,7 +239,7 @@ class Rig:
         """Hold these surface commands from now on: top-drive speed >= 0, hook load >= 0."""
         speed = check_number("top_drive_speed_rad_s", top_drive_speed_rad_s, low_inclusive=True)
         hook = check_number("hook_load_n", hook_load_n, low_inclusive=True)
-        self.sim.set_commands(self.w0_of(hook), self.omega0_of(speed))
+        self.sim.set_commands(*surface_commands(speed, hook, self._scale_row))
         self._speed_rad_s, self._hook_load_n = speed, hook
 
     def command_motor_torque(self, torque_nm: float) -> None:
@@ -277,7 +259,7 @@ class Rig:
         string torque), without taking ``sample``'s force means."""
         x = self.sim.live_state
         kinematic = self.sim.drive.mode == "kinematic"
-        return float(x[kn.X_TS if kinematic else kn.X_TM]) * self.scales.stiffness_nm_per_rad
+        return float(x[sl.X_TS if kinematic else sl.X_TM]) * self.scales.stiffness_nm_per_rad
 
     @property
     def commanded_speed_rad_s(self) -> float:
@@ -379,48 +361,37 @@ class Rig:
         pend_w, pend_t, pend_n = self._pending
         n += pend_n
         if n > 0:
-            sc = self.scales
-            self._mean_forces = ((pend_w + sum_w * sc.force_n) / n,
-                                 (pend_t + sum_t * sc.stiffness_nm_per_rad) / n)
+            self._mean_forces = mean_forces(sum_w, sum_t, n, pend_w, pend_t, self._scale_row)
             self._pending = (0.0, 0.0, 0)
         elif self._mean_forces is None:
             x = self.sim.live_state
-            self._mean_forces = (float(x[kn.X_W]) * self.scales.force_n,
-                                 float(x[kn.X_T]) * self.scales.stiffness_nm_per_rad)
+            self._mean_forces = (float(x[sl.X_W]) * self.scales.force_n,
+                                 float(x[sl.X_T]) * self.scales.stiffness_nm_per_rad)
         return self._mean_forces
 
     def sample(self) -> RigSample:
         """The rig's outputs now, in SI, read straight from the state arrays (the node calls
-        this every tick). WOB and TOB are the means since the previous sample (``mean_forces``;
-        the node samples every tick, so the tick mean); everything else is the value now."""
+        this every tick; ``rig_step.sample_into``). WOB and TOB are the means since the
+        previous sample (``mean_forces``; the node samples every tick, so the tick mean);
+        everything else is the value now."""
         wob_n, tob_nm = self.mean_forces()
-        x, regime = self.sim.live_state.tolist(), self.sim.regime   # floats: one call, not 10
-        sc = self.scales
-        c = sc.stiffness_nm_per_rad
-        kinematic = self.sim.drive.mode == "kinematic"
+        sim = self.sim
+        kinematic = sim.drive.mode == "kinematic"
+        sample_into(sim.live_state, sim.counts, kinematic, self._speed_rad_s, self._scale_row,
+                    self._sample_row)
+        (time_s, bit_rad_s, rop_m_s, surface_nm, cut_m, depth_m, hole_m, angle_rad,
+         td_angle_rad, td_rad_s, motor_nm, regime) = self._sample_row.tolist()
+        regime = int(regime)
         return RigSample(
-            time_s=self.time_s,
-            bit_speed_rad_s=x[kn.X_OMEGA] / sc.time_s,
-            rop_m_s=x[kn.X_V] * sc.velocity_m_s,
-            wob_n=wob_n,
-            tob_nm=tob_nm,
-            surface_torque_nm=x[kn.X_TS] * c,
-            depth_of_cut_m=self.groups.n * x[kn.X_DELTA] * sc.length_m,
-            bit_depth_m=x[kn.X_U] * sc.length_m,
-            hole_depth_m=max(0.0, self.sim.hole_bottom) * sc.length_m,
-            bit_angle_rad=x[kn.X_PHI],
-            top_drive_angle_rad=x[kn.X_PHI_TD],
-            top_drive_speed_rad_s=self._speed_rad_s if kinematic
-            else x[kn.X_OMEGA_TD] / sc.time_s,
+            time_s=time_s, bit_speed_rad_s=bit_rad_s, rop_m_s=rop_m_s, wob_n=wob_n,
+            tob_nm=tob_nm, surface_torque_nm=surface_nm, depth_of_cut_m=cut_m,
+            bit_depth_m=depth_m, hole_depth_m=hole_m, bit_angle_rad=angle_rad,
+            top_drive_angle_rad=td_angle_rad, top_drive_speed_rad_s=td_rad_s,
             hook_load_n=self._hook_load_n if self.hook_mode == "force"
             else self.measured_hook_load_n,
-            stuck=bool(regime == kn.REGIME_STUCK),
-            off_bottom=bool(regime == kn.REGIME_OFF_BOTTOM),
-            stick_slip=self.sim.stick_slip,
-            regime=regime,
-            top_drive_speed_setpoint_rad_s=self._speed_rad_s,
-            motor_torque_nm=x[kn.X_TS if kinematic else kn.X_TM] * c,
-        )
+            stuck=regime == REGIME_STUCK, off_bottom=regime == REGIME_OFF_BOTTOM,
+            stick_slip=sim.stick_slip, regime=regime,
+            top_drive_speed_setpoint_rad_s=self._speed_rad_s, motor_torque_nm=motor_nm)
 
     def metrics(self) -> dict[str, float]:
         """Metrics of the current window in SI (see drill_sim.core.metrics)."""

@@ -52,6 +52,11 @@ _severity_index = nb.njit(cache=True)(severity_index)
 SEVERITY_MAX = 10.0          # the severity shown when the bit's mean speed over a window is <= 0
 NOISE_BLOCK = 4096           # normal deviates drawn at a time, per channel
 _SAMPLE_FIELDS = CHANNELS[:-1]
+# the channels' indices, for compiled callers (the vector environment's step)
+M_SURFACE, M_TD_SPEED, M_MOTOR, M_HOOK, M_WOB, M_TOB, M_BIT = (
+    CHANNELS.index(name) for name in ("surface_torque_nm", "top_drive_speed_rad_s",
+                                      "motor_torque_nm", "hook_load_n", "wob_n", "tob_nm",
+                                      "bit_speed_rad_s"))
 _BIT_SPEED = CHANNELS.index("bit_speed_rad_s")
 _SEV = CHANNELS.index(SEVERITY)
 

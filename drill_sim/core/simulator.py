@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from . import kernel as kn
+from . import state_layout as sl
 from .metrics import Metrics
-from .parameters import Groups, ParameterError, check_number
+from .parameters import Groups, ParameterError, RigParameters, Scales, check_number
 from .resolution import (
     MAX_NODES,
     STEPS_PER_PERIOD,
@@ -25,18 +26,54 @@ from .resolution import (
     resolves,
     surface_nodes,
 )
+from .rig_step import take_force_sums
 from .stability import SteadyState, steady_state
+from .string_geometry import StringGeometry
 from .top_drive import DriveGroups
-from .trajectory import StateView, Trajectory
+from .trajectory import VIEW_SLOTS, StateView, Trajectory
 
 DEFAULT_DT = 5e-4            # [t*]; halving it moves stationary metrics ~2e-5 (test_validation)
+@dataclass(frozen=True)
+class SavedState:
+    """A simulator's whole state (``Simulator.save_state``): its string model and copies of
+    its state arrays by name."""
+
+    model: str
+    arrays: dict[str, np.ndarray]
+
+
 class Simulator:
-    """Fixed-step integration of the RGD model in dimensionless form.
+    """Fixed-step integration of the RGD model in dimensionless form, on the lumped string.
 
     dt: step [t*]. stick_window: how long the stick-slip flag stays up after a stick [t*];
     default two torsional periods (4 pi). hoist_speed_limit: the string rises no faster [L*/t*].
     drive: the top drive (default kinematic: the seed's ideal speed source).
+
+    A string model is a subclass (``distributed_simulator.StringSimulator``) and provides:
+
+    - ``MODEL``: its name, which says the slots of ``state_layout`` its arrays hold (every
+      array is sized for it at construction), and ``for_rig``, its simulator of SI
+      parameters and a pipe;
+    - its own arrays, named in ``_homes`` (``arrays``), those that hold state in
+      ``STATE_ARRAYS`` (``save_state``/``load_state`` keep them exactly; the vector
+      environment stacks every one a rig owns);
+    - ``advance_into``, its kernel: the bit, the rock and the window's integrals as the lumped
+      kernel keeps them (``kernel._accumulate``, the same rows), the string its own;
+    - ``start_steady`` and ``start_at_rest`` that leave every one of its arrays started;
+    - at the top of the string: ``set_hook``/``hook_position`` if its top can be moved by the
+      block, ``top_force`` if its top carries a force of its own (else None: the command);
+    - ``carried_to``: the same physical state under new parameters, or ParameterError if its
+      state cannot be carried.
     """
+
+    MODEL = sl.LUMPED       # the string model: which slots of ``state_layout`` it holds
+
+    @classmethod
+    def for_rig(cls, params: RigParameters, geometry: StringGeometry | None, dt: float,
+                drive: DriveGroups) -> Simulator:
+        """The simulator of SI ``params`` (their groups) at step ``dt`` [t*]; the lumped string
+        has no pipe of its own (``geometry`` unused)."""
+        return cls(params.groups, dt, drive=drive)
 
     def __init__(self, groups: Groups, dt: float = DEFAULT_DT, *, stick_window: float = 4 * math.pi,
                  hoist_speed_limit: float = math.inf, nodes: int | None = None,
@@ -51,16 +88,16 @@ class Simulator:
             raise ParameterError(f"nodes = {nodes} is out of range: expected a power of two "
                                  f"4..{MAX_NODES}")
         dtheta = 2.0 * math.pi / groups.n / nodes
-        self._p = np.zeros(kn.NP)
-        self._p[:kn.P_MODE] = (groups.n, groups.psi, groups.lam, groups.beta, self.dt, dtheta,
+        self._p = sl.PARAMETERS.empty(self.MODEL)
+        self._p[:sl.P_MODE] = (groups.n, groups.psi, groups.lam, groups.beta, self.dt, dtheta,
                                1.0 / dtheta)
         self.rock = (1.0, groups.lam, groups.beta)   # set_rock
-        self._x = np.zeros(kn.NX)
-        self._k = np.zeros(kn.NK, dtype=np.int64)
+        self._x = sl.STATE.empty(self.MODEL)
+        self._k = sl.COUNTS.empty(self.MODEL)
         self._surf = np.zeros(nodes)
-        self._c = np.zeros(kn.NC)
-        self._acc = np.zeros(kn.NA)
-        self._no_rows = np.zeros((0, kn.NO))
+        self._c = sl.COMMANDS.empty(self.MODEL)
+        self._acc = sl.WINDOW.empty(self.MODEL)
+        self._no_rows = np.zeros((0, sl.OUTPUTS.size(self.MODEL)))
         self.drive = drive
         self._write_drive(drive)
         self.set_hoist_speed_limit(hoist_speed_limit)
@@ -86,24 +123,24 @@ class Simulator:
                                  f"the drive's limits [{d.t_min:.4g}, {d.t_max:.4g}] C")
         self.set_commands(w0, omega0)
         nodes = self._surf.size
-        dtheta = self._p[kn.P_DTHETA]
+        dtheta = self._p[sl.P_DTHETA]
         theta = np.arange(nodes) * dtheta
         self._surf[:] = st.v0 * (theta - 2.0 * math.pi / self.groups.n) / st.omega0
         self._surf[0] = 0.0
         self._x[:] = 0.0                       # X_HOLE = 0: the deepest point is under the bit
-        self._x[kn.X_V] = st.v0
-        self._x[kn.X_OMEGA] = st.omega0 * (1.0 + perturbation)
-        self._x[kn.X_PHI_TD] = st.t0
-        self._x[kn.X_S_BEHIND] = -st.delta_n0
-        self._x[kn.X_SINCE_STICK] = math.inf
-        self._x[kn.X_W] = w0
-        self._x[kn.X_T] = self._x[kn.X_TS] = st.t0
-        self._x[kn.X_DELTA] = st.delta_n0
-        self._x[kn.X_G] = 1.0
+        self._x[sl.X_V] = st.v0
+        self._x[sl.X_OMEGA] = st.omega0 * (1.0 + perturbation)
+        self._x[sl.X_PHI_TD] = st.t0
+        self._x[sl.X_S_BEHIND] = -st.delta_n0
+        self._x[sl.X_SINCE_STICK] = math.inf
+        self._x[sl.X_W] = w0
+        self._x[sl.X_T] = self._x[sl.X_TS] = st.t0
+        self._x[sl.X_DELTA] = st.delta_n0
+        self._x[sl.X_G] = 1.0
         x = self._x      # the drive turns at omega0 under the steady torque; the PI's error is 0
-        x[kn.X_OMEGA_TD] = omega0
-        x[kn.X_TM] = x[kn.X_TREF] = x[kn.X_DRIVE_I] = st.t0
-        self._c[kn.C_T_CMD] = st.t0
+        x[sl.X_OMEGA_TD] = omega0
+        x[sl.X_TM] = x[sl.X_TREF] = x[sl.X_DRIVE_I] = st.t0
+        self._c[sl.C_T_CMD] = st.t0
         self._k[:] = (0, kn.REGIME_ROTATING, 0, 0, 0)
         self.reset_window()
 
@@ -119,8 +156,8 @@ class Simulator:
         beta = self.groups.beta if beta is None else check_number("beta", beta,
                                                                    low_inclusive=True)
         self.rock = (cutting, lam, beta)
-        self._p[kn.P_N] = self.groups.n * cutting
-        self._p[kn.P_LAM], self._p[kn.P_BETA] = lam, beta
+        self._p[sl.P_N] = self.groups.n * cutting
+        self._p[sl.P_LAM], self._p[sl.P_BETA] = lam, beta
 
     def steady(self, w0: float, omega0: float) -> SteadyState:
         """Steady drilling at (w0, omega0) in the rock being cut (``set_rock``): the model
@@ -135,63 +172,90 @@ class Simulator:
         """Bit at rest ``gap`` [L*] above a flat bottom, string relaxed, commands zero."""
         gap = check_number("gap", gap, low_inclusive=True)
         self.set_commands(0.0, 0.0)
-        self._c[kn.C_T_CMD] = 0.0
+        self._c[sl.C_T_CMD] = 0.0
         self._surf[:] = 0.0
         self._x[:] = 0.0
-        self._x[kn.X_U] = -gap
-        self._x[kn.X_SINCE_STICK] = math.inf
+        self._x[sl.X_U] = -gap
+        self._x[sl.X_SINCE_STICK] = math.inf
         self._k[:] = (0, kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK, 0, 0, 0)
         self.reset_window()
 
-    def load_state(self, *, tau: float, steps: int, u: float, v: float, phi: float, omega: float,
-                   phi_td: float, surface: np.ndarray, regime: int, since_stick: float,
-                   w: float = 0.0, t: float = 0.0, delta_n: float = 0.0, g: float = 0.0,
-                   surface_behind: float | None = None, omega_td: float | None = None,
-                   motor_torque: float | None = None, drive_integral: float | None = None,
-                   drive_reference: float | None = None) -> None:
-        """Put the bit, string and rock in a given state (dimensionless).
+    def place(self, state: StateView, *, steps: int, surface: np.ndarray) -> None:
+        """Put the bit, string and rock in a given physical state (dimensionless), the
+        commands, parameters and metrics window kept: the lumped string's placement (a
+        distributed string's state is its wave buffers: ``save_state``/``load_state``).
 
-        ``surface`` is S over one sector at any even spacing (node 0 at the sector's start), as
-        ``surface`` reads it, and is resampled onto this simulator's nodes. The blades' current
-        pass has already cut the last node they passed (the node at or below phi); its value
-        from before the pass, which the next depth of cut is measured against, is
-        ``surface_behind`` (as ``surface_behind`` reads it; None: the given value, i.e. that
-        node was not cut by the current pass). w, t, delta_n and g are what the last step's
-        outputs read until the next step; the force sums of the next sample start from here.
-        The top drive: its speed (None: the speed command), motor torque (None: the string's,
-        phi_td - phi), the PI's integral term and the limited reference (None: the motor
-        torque); kinematic mode keeps the top drive at the speed command whatever is given.
+        ``state`` holds the slots of ``StateView`` (``dataclasses.replace`` of a ``state()``
+        sets some); ``steps`` the step count it is at. ``surface`` is S over one sector at any
+        even spacing (node 0 at the sector's start), as ``surface`` reads it, resampled onto
+        this simulator's nodes. The blades' current pass has already cut the last node they
+        passed (the node at or below phi); its value from before the pass, which the next
+        depth of cut is measured against, is ``state.surface_behind``. w, t, delta_n and g
+        are what the last step's outputs read until the next step; the force sums of the next
+        sample start from here. ts is phi_td - phi and the hole's bottom the surface's
+        deepest point, whatever ``state`` says; kinematic mode keeps the top drive at the
+        speed command.
         """
-        values = np.array([tau, u, v, phi, omega, phi_td, since_stick], dtype=float)
-        if not np.all(np.isfinite(values[:6])) or not np.all(np.isfinite(surface)):
-            raise ParameterError("load_state: the state must be finite")
-        self.take_force_sums()            # the window keeps the steps before the load
+        values = np.array([getattr(state, name) for name, _ in VIEW_SLOTS], dtype=float)
+        if not np.all(np.isfinite(values[[i for i, (name, _) in enumerate(VIEW_SLOTS)
+                                          if name != "since_stick"]])) \
+                or not np.all(np.isfinite(surface)):
+            raise ParameterError("place: the state must be finite")
+        self.take_force_sums()            # the window keeps the steps before the placement
         src = np.asarray(surface, dtype=float)
         before = src.copy()               # the surface as the current pass found it
-        if surface_behind is not None:
-            before[math.floor(phi * src.size * self.groups.n / (2.0 * math.pi)) % src.size] = \
-                check_number("surface_behind", surface_behind, low=None)
+        phi = float(state.phi)
+        before[math.floor(phi * src.size * self.groups.n / (2.0 * math.pi)) % src.size] = \
+            state.surface_behind
         nodes = self._surf.size
         x_src = np.arange(src.size + 1) / src.size
         x_dst = np.arange(nodes) / nodes
         self._surf[:] = np.interp(x_dst, x_src, np.append(src, src[0]))
-        k_last = math.floor(phi * self._p[kn.P_INV_DTHETA])
+        k_last = math.floor(phi * self._p[sl.P_INV_DTHETA])
         k_node = k_last & (nodes - 1)
         x = self._x
-        x[kn.X_TAU], x[kn.X_U], x[kn.X_V], x[kn.X_PHI], x[kn.X_OMEGA], x[kn.X_PHI_TD] = values[:6]
-        x[kn.X_SINCE_STICK] = since_stick
-        x[kn.X_HOLE] = float(self._surf.max())
-        x[kn.X_TS] = phi_td - phi
-        x[kn.X_W], x[kn.X_T], x[kn.X_DELTA], x[kn.X_G] = w, t, delta_n, g
-        x[kn.X_S_BEHIND] = float(np.interp(x_dst[k_node], x_src, np.append(before, before[0])))
-        x[kn.X_SUM_W] = x[kn.X_SUM_T] = 0.0
-        tm = phi_td - phi if motor_torque is None else motor_torque
-        x[kn.X_OMEGA_TD] = self._c[kn.C_OMEGA0] if omega_td is None or \
-            self.drive.mode == "kinematic" else omega_td
-        x[kn.X_TM] = tm
-        x[kn.X_DRIVE_I] = tm if drive_integral is None else drive_integral
-        x[kn.X_TREF] = tm if drive_reference is None else drive_reference
-        self._k[:] = (k_last, regime, steps, steps, 0)
+        for (_, i), value in zip(VIEW_SLOTS, values, strict=True):
+            x[i] = value
+        x[sl.X_HOLE] = float(self._surf.max())
+        x[sl.X_TS] = state.phi_td - state.phi
+        x[sl.X_S_BEHIND] = float(np.interp(x_dst[k_node], x_src, np.append(before, before[0])))
+        x[sl.X_SUM_W] = x[sl.X_SUM_T] = 0.0
+        if self.drive.mode == "kinematic":
+            x[sl.X_OMEGA_TD] = self._c[sl.C_OMEGA0]
+        self._k[:sl.NK] = (k_last, state.regime, steps, steps, 0)
+
+    def _homes(self) -> dict[str, tuple[object, str]]:
+        """Every array this simulator steps, by name: (the object holding it, its attribute).
+        The lumped string's: the state x, k, the rock surface, the commands, the window's
+        integrals and the parameters p; a string model adds its own."""
+        return {"x": (self, "_x"), "k": (self, "_k"), "surface": (self, "_surf"),
+                "c": (self, "_c"), "acc": (self, "_acc"), "p": (self, "_p")}
+
+    STATE_ARRAYS: tuple[str, ...] = ("x", "k", "surface", "c", "acc")   # what save_state keeps
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Every array this simulator steps, by name (``_homes``), not copies."""
+        return {name: getattr(owner, attr) for name, (owner, attr) in self._homes().items()}
+
+    def save_state(self) -> SavedState:
+        """A copy of the whole state (``STATE_ARRAYS``: the kernels' state, counts, rock
+        surface, held commands and window integrals; a string model's own arrays too), to
+        ``load_state`` later; the parameters (the rock being cut, the drive) are not state."""
+        arrays = self.arrays()
+        return SavedState(self.MODEL, {name: arrays[name].copy() for name in self.STATE_ARRAYS})
+
+    def load_state(self, saved: SavedState) -> None:
+        """Back to a ``save_state`` of a simulator of this model and shape, exactly; the
+        parameters stay this simulator's. Refused, nothing changed, for another model or
+        shape."""
+        arrays = self.arrays()
+        if saved.model != self.MODEL or set(saved.arrays) != set(self.STATE_ARRAYS) or any(
+                saved.arrays[n].shape != arrays[n].shape for n in self.STATE_ARRAYS):
+            raise ParameterError(f"load_state: a saved {saved.model} state of another shape "
+                                 f"than this {self.MODEL} simulator's (string model, step or "
+                                 "string): expected one saved from a simulator like this one")
+        for name in self.STATE_ARRAYS:
+            np.copyto(arrays[name], saved.arrays[name])
 
     # ---- commands -----------------------------------------------------------------------
     def set_commands(self, w0: float, omega0: float) -> None:
@@ -201,18 +265,18 @@ class Simulator:
         w0 = check_number("w0", w0, low=None)
         omega0 = check_number("omega0", omega0, low_inclusive=True,
                               high=2.0 * math.pi / self.groups.n / self.dt)
-        self._c[kn.C_W0], self._c[kn.C_OMEGA0] = w0, omega0   # both valid, or neither set
+        self._c[sl.C_W0], self._c[sl.C_OMEGA0] = w0, omega0   # both valid, or neither set
         if self.drive.mode == "kinematic":
-            self._x[kn.X_OMEGA_TD] = omega0
+            self._x[sl.X_OMEGA_TD] = omega0
 
     def set_motor_torque(self, torque: float) -> None:
         """The motor torque command [C] (torque mode), held from now; the drive's limits, rate
         limit and lag act on it."""
-        self._c[kn.C_T_CMD] = check_number("motor torque", torque, low=None)
+        self._c[sl.C_T_CMD] = check_number("motor torque", torque, low=None)
 
     @property
     def motor_torque_command(self) -> float:
-        return float(self._c[kn.C_T_CMD])
+        return float(self._c[sl.C_T_CMD])
 
     def set_drive(self, drive: DriveGroups) -> None:
         """Change the top drive at run time, the state kept. A change of mode is bumpless: the
@@ -224,35 +288,62 @@ class Simulator:
         x, c, old = self._x, self._c, self.drive
         if drive.mode != old.mode:
             if old.mode == "kinematic":
-                x[kn.X_OMEGA_TD] = c[kn.C_OMEGA0]
-                x[kn.X_TM] = x[kn.X_TREF] = x[kn.X_TS]
+                x[sl.X_OMEGA_TD] = c[sl.C_OMEGA0]
+                x[sl.X_TM] = x[sl.X_TREF] = x[sl.X_TS]
             if drive.mode == "torque":
-                c[kn.C_T_CMD] = x[kn.X_TM]
+                c[sl.C_T_CMD] = x[sl.X_TM]
             elif drive.mode == "speed":
-                error = c[kn.C_OMEGA0] - x[kn.X_OMEGA_TD]
-                x[kn.X_DRIVE_I] = min(max(x[kn.X_TREF] - drive.kp * error, drive.t_min),
+                error = c[sl.C_OMEGA0] - x[sl.X_OMEGA_TD]
+                x[sl.X_DRIVE_I] = min(max(x[sl.X_TREF] - drive.kp * error, drive.t_min),
                                       drive.t_max)
             else:
-                x[kn.X_OMEGA_TD] = c[kn.C_OMEGA0]
+                x[sl.X_OMEGA_TD] = c[sl.C_OMEGA0]
         self.drive = drive
         self._write_drive(drive)
 
     def _write_drive(self, d: DriveGroups) -> None:
         self._advance = kn.stepper(d.code)
         p = self._p
-        p[kn.P_MODE], p[kn.P_J], p[kn.P_T_MAX], p[kn.P_T_MIN] = d.code, d.j, d.t_max, d.t_min
-        p[kn.P_RATE], p[kn.P_LAG], p[kn.P_KP], p[kn.P_KI] = d.rate, d.lag, d.kp, d.ki
-        p[kn.P_LAG_END], p[kn.P_LAG_MEAN] = d.lag_weights(self.dt)
+        p[sl.P_MODE], p[sl.P_J], p[sl.P_T_MAX], p[sl.P_T_MIN] = d.code, d.j, d.t_max, d.t_min
+        p[sl.P_RATE], p[sl.P_LAG], p[sl.P_KP], p[sl.P_KI] = d.rate, d.lag, d.kp, d.ki
+        p[sl.P_LAG_END], p[sl.P_LAG_MEAN] = d.lag_weights(self.dt)
 
     def set_hoist_speed_limit(self, limit: float) -> None:
         """Fastest upward axial speed [L*/t*]; math.inf for none (the pure model)."""
         if limit != math.inf:
             limit = check_number("hoist_speed_limit", limit)
-        self._c[kn.C_V_MIN] = -limit
+        self._c[sl.C_V_MIN] = -limit
 
     @property
     def commands(self) -> tuple[float, float]:
-        return float(self._c[kn.C_W0]), float(self._c[kn.C_OMEGA0])
+        return float(self._c[sl.C_W0]), float(self._c[sl.C_OMEGA0])
+
+    # ---- the top of the string ----------------------------------------------------------
+    hook_position = False     # the block holds the top (a string model whose top can move)
+
+    def set_hook(self, position: bool, block_speed: float = 0.0) -> None:
+        """The string's axial top boundary: the hook's force (``position`` False, the only one
+        of a lumped string: it is axially rigid, so a held block would hold the bit)."""
+        if position:
+            raise ParameterError("hook_mode = 'position' needs string_model = 'distributed': "
+                                 "the lumped string is axially rigid, so a block held still "
+                                 "would hold the bit; use hook_mode = 'force'")
+
+    @property
+    def top_force(self) -> float | None:
+        """The force the string's top takes from the hook [F*]; None: the lumped string has
+        none of its own (the command w0)."""
+        return None
+
+    def carried_to(self, groups: Groups, dt: float, drive: DriveGroups, old: Scales,
+                   new: Scales) -> Simulator:
+        """A simulator of ``groups`` at step ``dt`` [t*] with ``drive``, in the physical state
+        of this one (``place``: every slot carried from the ``old`` scales to the ``new``), at
+        this one's step count."""
+        sim = type(self)(groups, dt, drive=drive)
+        sim.place(self.state().rescaled(old, new), steps=self.steps,
+                  surface=sl.LENGTH.rescale(self.surface, old, new))
+        return sim
 
     # ---- stepping -----------------------------------------------------------------------
     def advance(self, n_steps: int) -> None:
@@ -262,14 +353,14 @@ class Simulator:
         would turn the bit more than a sector (see ``kernel.advance``)."""
         self._advance(self._x, self._k, self._surf, self._p, self._c, self._acc, n_steps,
                       self._no_rows, 1, 0)
-        if self._k[kn.K_REFUSED]:
+        if self._k[sl.K_REFUSED]:
             self._refuse_step()
 
     def _refuse_step(self) -> None:
         sector = 2.0 * math.pi / self.groups.n
         raise ParameterError(
             f"at tau = {self.tau:.6g} the next step (dt = {self.dt:g}) would turn the bit more "
-            f"than a sector 2 pi/n = {sector:.4g} rad, from bit speed {self._x[kn.X_OMEGA]:.4g}: "
+            f"than a sector 2 pi/n = {sector:.4g} rad, from bit speed {self._x[sl.X_OMEGA]:.4g}: "
             "the rock surface cannot be swept nor the depth of cut measured; use a smaller dt "
             "or less weight on bit (the string winds up to about w0, and the bit slips at "
             "about that speed); the state is kept at the last step")
@@ -280,7 +371,7 @@ class Simulator:
         since the previous sample (a row, ``take_force_sums``, ``start_sample``, a start)."""
         row = int(self._advance(self._x, self._k, self._surf, self._p, self._c, self._acc,
                                 n_steps, out, every, row))
-        if self._k[kn.K_REFUSED]:
+        if self._k[sl.K_REFUSED]:
             self._refuse_step()
         return row
 
@@ -306,7 +397,7 @@ class Simulator:
             every, out = 1, self._no_rows
         else:
             every = max(1, round(check_number("output_interval", output_interval) / self.dt))
-            out = np.empty((n_total // every + 1, kn.NO))
+            out = np.empty((n_total // every + 1, sl.NO))
         chunk = n_total if schedule is None else max(1, round(schedule_interval / self.dt))
         chunk = min(chunk, 2_000_000) if progress is not None else chunk
         row, done = 0, 0
@@ -324,16 +415,22 @@ class Simulator:
     # ---- observation --------------------------------------------------------------------
     @property
     def tau(self) -> float:
-        return float(self._x[kn.X_TAU])
+        return float(self._x[sl.X_TAU])
 
     @property
     def steps(self) -> int:
-        return int(self._k[kn.K_STEPS])
+        return int(self._k[sl.K_STEPS])
 
     @property
     def regime(self) -> int:
         """kernel.REGIME_* of the last step."""
-        return int(self._k[kn.K_REGIME])
+        return int(self._k[sl.K_REGIME])
+
+    @property
+    def counts(self) -> np.ndarray:
+        """The kernel's integer state itself (indexed by ``state_layout.K_*``), not a copy.
+        Read it; never write it."""
+        return self._k
 
     @property
     def live_state(self) -> np.ndarray:
@@ -342,37 +439,31 @@ class Simulator:
         return self._x
 
     def state(self) -> StateView:
-        x, k = self._x, self._k
-        return StateView(tau=x[kn.X_TAU], u=x[kn.X_U], v=x[kn.X_V], phi=x[kn.X_PHI],
-                         omega=x[kn.X_OMEGA], phi_td=x[kn.X_PHI_TD], w=x[kn.X_W], t=x[kn.X_T],
-                         ts=x[kn.X_TS], delta_n=x[kn.X_DELTA], g=x[kn.X_G],
-                         regime=int(k[kn.K_REGIME]), since_stick=x[kn.X_SINCE_STICK],
-                         omega_td=x[kn.X_OMEGA_TD],
-                         motor_torque=x[kn.X_TS if self.drive.mode == "kinematic" else kn.X_TM],
-                         drive_integral=x[kn.X_DRIVE_I], drive_reference=x[kn.X_TREF])
+        """A copy of the physical state now (``StateView``; kinematic mode: the motor torque
+        is the string's, ts)."""
+        x = self._x
+        values = {name: x[i] for name, i in VIEW_SLOTS}
+        if self.drive.mode == "kinematic":
+            values["motor_torque"] = x[sl.X_TS]
+        return StateView(**values, regime=int(self._k[sl.K_REGIME]))
 
     def take_force_sums(self) -> tuple[float, float, int]:
         """(sum of w, sum of t, steps) over the steps since the previous sample (a call, an
         output row, a start or ``load_state``), and start the next: a sample's mean WOB and TOB
         are the sums over the steps (see ``Rig.sample``)."""
-        x, k, acc, h = self._x, self._k, self._acc, self.dt
-        sums = (float(x[kn.X_SUM_W]), float(x[kn.X_SUM_T]), int(k[kn.K_STEPS] - k[kn.K_SAMPLED]))
-        acc[kn.A_W] += h * sums[0]              # the window's integrals take the sample in
-        acc[kn.A_T] += h * sums[1]
-        x[kn.X_SUM_W] = x[kn.X_SUM_T] = 0.0
-        k[kn.K_SAMPLED] = k[kn.K_STEPS]
-        return sums
+        sum_w, sum_t, n = take_force_sums(self._x, self._k, self._acc, self.dt)
+        return float(sum_w), float(sum_t), int(n)
 
     @property
     def stick_slip(self) -> bool:
         """The stick-slip flag (model contract, section 7): a stick within the last
         ``stick_window``."""
-        return bool(self._x[kn.X_SINCE_STICK] < self.stick_window)
+        return bool(self._x[sl.X_SINCE_STICK] < self.stick_window)
 
     @property
     def hole_bottom(self) -> float:
         """Deepest point of the rock surface [L*], positive downhole."""
-        return float(self._x[kn.X_HOLE])
+        return float(self._x[sl.X_HOLE])
 
     @property
     def surface(self) -> np.ndarray:
@@ -383,19 +474,19 @@ class Simulator:
     def surface_behind(self) -> float:
         """S at the last node the blades passed, from before the current pass [L*]: what the
         next depth of cut is measured against there (``load_state`` takes it back)."""
-        return float(self._x[kn.X_S_BEHIND])
+        return float(self._x[sl.X_S_BEHIND])
 
     def reset_window(self) -> None:
         """Start a new metrics window now."""
         self._acc[:] = 0.0
-        self._acc[kn.A_OMEGA_MIN] = math.inf
-        self._acc[kn.A_OMEGA_MAX] = -math.inf
-        self._acc[kn.A_W] = -self.dt * self._x[kn.X_SUM_W]   # the pending sample's steps are
-        self._acc[kn.A_T] = -self.dt * self._x[kn.X_SUM_T]   # before the window
+        self._acc[sl.A_OMEGA_MIN] = math.inf
+        self._acc[sl.A_OMEGA_MAX] = -math.inf
+        self._acc[sl.A_W] = -self.dt * self._x[sl.X_SUM_W]   # the pending sample's steps are
+        self._acc[sl.A_T] = -self.dt * self._x[sl.X_SUM_T]   # before the window
 
     def window_metrics(self) -> Metrics:
         """Metrics (model contract, section 7) over the window since the last ``reset_window``."""
         acc = self._acc.copy()
-        acc[kn.A_W] += self.dt * self._x[kn.X_SUM_W]
-        acc[kn.A_T] += self.dt * self._x[kn.X_SUM_T]
+        acc[sl.A_W] += self.dt * self._x[sl.X_SUM_W]
+        acc[sl.A_T] += self.dt * self._x[sl.X_SUM_T]
         return Metrics.from_accumulators(acc)

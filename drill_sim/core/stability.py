@@ -14,12 +14,12 @@ agreed, so a caller knows none were missed. A box expected to hold more than MAX
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from .parameters import Groups, ParameterError, check_number
+from .roots import newton_from_grid, winding_number
 
 
 class NoSteadyDrilling(ValueError):
@@ -157,7 +157,8 @@ def stability(groups: Groups, w0: float, omega0: float, *, re_min: float = -0.5)
                            "change re_min")
     roots = np.empty(0, dtype=complex)
     for density in (40, 80, 160, 320):
-        roots = _newton_from_grid(box, groups, steady, density)
+        roots = newton_from_grid(box, lambda s: characteristic(s, groups, steady), density,
+                                 2 * density, _is_root)
         if roots.size == count:
             break
     nonzero = roots[np.abs(roots) > 1e-7]
@@ -166,43 +167,6 @@ def stability(groups: Groups, w0: float, omega0: float, *, re_min: float = -0.5)
                            count_argument_principle=count, complete=roots.size == count)
 
 
-def winding_number(box, f: Callable[[np.ndarray], np.ndarray], edge: str,
-                   max_points: int = 2**21) -> int:
-    """Zeros of the analytic ``f`` inside ``box`` = (x0, x1, y0, y1) by the argument principle,
-    the edge refined until the phase moves less than pi/4 a point (or ``max_points`` a side);
-    a zero on the edge is a ParameterError ending with ``edge`` (what to change)."""
-    x0, x1, y0, y1 = box
-    corners = [complex(x0, y0), complex(x1, y0), complex(x1, y1), complex(x0, y1), complex(x0, y0)]
-    points = 2048
-    while True:
-        path = np.concatenate([np.linspace(corners[i], corners[i + 1], points, endpoint=False)
-                               for i in range(4)] + [np.array([corners[0]])])
-        value = f(path)
-        if np.any(np.abs(value) == 0.0):
-            raise ParameterError(f"a root lies on the search box edge; {edge}")
-        steps = np.diff(np.unwrap(np.angle(value)))
-        if np.max(np.abs(steps)) < math.pi / 4 or points > max_points:
-            return round(np.sum(steps) / (2.0 * math.pi))
-        points *= 4
-
-
-def _newton_from_grid(box, groups: Groups, steady: SteadyState, density: int) -> np.ndarray:
-    x0, x1, y0, y1 = box
-    re = np.linspace(x0, x1, density)
-    im = np.linspace(y0, y1, 2 * density)
-    s = (re[None, :] + 1j * im[:, None]).ravel()
-    with np.errstate(all="ignore"):            # iterates that leave the box become NaN
-        for _ in range(60):
-            value, deriv = characteristic(s, groups, steady)
-            step = value / deriv
-            step[~np.isfinite(step)] = 0.0
-            s = s - step
-            s = np.where(np.abs(s) > 4.0 * max(abs(x0), x1, y1), np.nan, s)
-        value, deriv = characteristic(s, groups, steady)
-    good = np.isfinite(s) & (np.abs(value) <= 1e-9 * (1.0 + np.abs(s) ** 4))
-    good &= (s.real >= x0) & (s.real <= x1) & (s.imag >= y0) & (s.imag <= y1)
-    found: list[complex] = []
-    for root in s[good]:
-        if all(abs(root - other) > 1e-6 * (1.0 + abs(root)) for other in found):
-            found.append(complex(root))
-    return np.array(found, dtype=complex)
+def _is_root(s: np.ndarray, value: np.ndarray, deriv: np.ndarray) -> np.ndarray:
+    """|Delta(s)| <= 1e-9 (1 + |s|^4): Delta grows as s^4."""
+    return np.abs(value) <= 1e-9 * (1.0 + np.abs(s) ** 4)

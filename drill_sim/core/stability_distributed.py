@@ -29,7 +29,8 @@ import numpy as np
 
 from .distributed import StringWaves, WaveLine
 from .parameters import Groups, ParameterError
-from .stability import SteadyState, steady_state, winding_number
+from .roots import central_difference, newton_from_grid, winding_number
+from .stability import SteadyState, steady_state
 from .top_drive import DriveGroups
 
 ZERO_BOX = 1e-4          # half-width of the box about s = 0 whose roots are s = 0 [1/t*]
@@ -108,7 +109,7 @@ def string_stability(groups: Groups, waves: StringWaves, w0: float, omega0: floa
     count = winding_number(box, f, "change the box", max_points=2**20)
     roots = np.empty(0, dtype=complex)
     for density in (40, 80, 160):
-        roots = _newton_from_grid(box, f, density)
+        roots = find_roots(box, f, density)
         if roots.size == count:
             break
     # s = 0 is a root once with the top held, twice where the top has no static stiffness
@@ -122,28 +123,15 @@ def string_stability(groups: Groups, waves: StringWaves, w0: float, omega0: floa
                            nonzero.size == count - at_zero, at_zero)
 
 
-def _newton_from_grid(box, f, density: int) -> np.ndarray:
-    x0, x1, y0, y1 = box
-    s = (np.linspace(x0, x1, density)[None, :]
-         + 1j * np.linspace(y0, y1, 4 * density)[:, None]).ravel()
-    d = 1e-6
-    with np.errstate(all="ignore"):
-        for _ in range(60):
-            value = f(s)
-            deriv = (f(s + d) - f(s - d)) / (2.0 * d)
-            step = value / deriv
-            step[~np.isfinite(step)] = 0.0
-            s = s - step
-            s = np.where(np.abs(s) > 4.0 * max(abs(x0), x1, y1), np.nan, s)
-        value = f(s)
-        scale = np.abs((f(s + d) - f(s - d)) / (2.0 * d))
-    good = np.isfinite(s) & (np.abs(value) <= 1e-8 * (1.0 + scale) * (1.0 + np.abs(s)))
-    good &= (s.real >= x0) & (s.real <= x1) & (s.imag >= y0) & (s.imag <= y1)
-    found: list[complex] = []
-    for root in s[good]:
-        if all(abs(root - other) > 1e-6 * (1.0 + abs(root)) for other in found):
-            found.append(complex(root))
-    return np.array(found, dtype=complex)
+def find_roots(box, f: Callable[[np.ndarray], np.ndarray], density: int) -> np.ndarray:
+    """The zeros of ``f`` in ``box`` by Newton from a ``density`` x 4 ``density`` grid
+    (``roots.newton_from_grid``), its derivative by central difference (step 1e-6), a zero
+    where |f| <= 1e-8 (1 + |f'|)(1 + |s|)."""
+    return newton_from_grid(box, central_difference(f), density, 4 * density, _is_root)
+
+
+def _is_root(s: np.ndarray, value: np.ndarray, deriv: np.ndarray) -> np.ndarray:
+    return np.abs(value) <= 1e-8 * (1.0 + np.abs(deriv)) * (1.0 + np.abs(s))
 
 
 def natural_frequencies(waves: StringWaves, psi: float, count: int = 3,
@@ -266,7 +254,7 @@ def string_modes(waves: StringWaves, psi: float, drive: DriveGroups, count: int 
         n = winding_number(box, f, "the search box for the modes", max_points=2**18)
         roots = np.empty(0, dtype=complex)
         for density in (12, 40, 80):
-            roots = _newton_from_grid(box, f, density)
+            roots = find_roots(box, f, density)
             if roots.size >= n:
                 break
         complete &= roots.size == n and n >= count

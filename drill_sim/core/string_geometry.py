@@ -9,53 +9,21 @@ from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
 from .parameters import GRAVITY_M_S2, ParameterError, check_number
+from .tube import Tube
 from .well import Well, along_hole, normal_force
 
 
-def polar_moment_m4(od_m: float, id_m: float) -> float:
-    """A tube's polar moment of area [m^4]."""
-    return math.pi / 32.0 * (od_m**4 - id_m**4)
-
-
-def area_m2(od_m: float, id_m: float) -> float:
-    """A tube's cross-section [m^2]."""
-    return math.pi / 4.0 * (od_m**2 - id_m**2)
-
-
 @dataclass(frozen=True)
-class StringSection:
-    """One uniform tube of the string, SI: length, outer and inner diameter; ``bha``: part of
-    the bottom-hole assembly (rigid in both string models, its inertia and mass the BHA's);
-    its material, None for the string's (shear and Young's moduli [Pa], density [kg/m^3])."""
+class StringSection(Tube):
+    """One uniform tube of the string (``Tube``: geometry [m], material [Pa, kg/m^3], None for
+    the string's); ``bha``: part of the bottom-hole assembly (rigid in both string models, its
+    inertia and mass the BHA's). Its ``keys()`` are a preset's keys of a section."""
 
-    length_m: float
-    od_m: float
-    id_m: float
     bha: bool = False
-    shear_modulus_pa: float | None = None
-    young_modulus_pa: float | None = None
-    steel_density_kg_m3: float | None = None
 
-    def __post_init__(self) -> None:
-        for name in ("length_m", "od_m", "id_m"):
-            object.__setattr__(self, name, check_number(name, getattr(self, name),
-                                                        low_inclusive=name == "id_m"))
-        if self.id_m >= self.od_m:
-            raise ParameterError(f"id_m = {self.id_m!r} is out of range: expected a finite "
-                                 f"number >= 0 and < od_m = {self.od_m!r}")
+    def _check(self) -> None:
         if not isinstance(self.bha, bool):
             raise ParameterError(f"bha = {self.bha!r}: expected true or false")
-        for name in ("shear_modulus_pa", "young_modulus_pa", "steel_density_kg_m3"):
-            if getattr(self, name) is not None:
-                object.__setattr__(self, name, check_number(name, getattr(self, name)))
-
-    @property
-    def polar_moment_m4(self) -> float:
-        return polar_moment_m4(self.od_m, self.id_m)
-
-    @property
-    def area_m2(self) -> float:
-        return area_m2(self.od_m, self.id_m)
 
 
 @dataclass(frozen=True)

@@ -5,44 +5,47 @@ and match the SI columns of ``drill_sim simulate``'s CSV)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, make_dataclass
 
 import numpy as np
 
 from . import kernel as kn
+from . import state_layout as sl
 from .metrics import Metrics
 from .parameters import Scales
 
 
-@dataclass(frozen=True)
-class StateView:
-    """A copy of the instantaneous state, dimensionless, with the model contract's names."""
+def _view_fields() -> tuple[tuple[str, int], ...]:
+    """(name, index into x) of the state view's float slots, in the declaration's order."""
+    return tuple((s.name, i) for i, s in enumerate(sl.STATE.of(sl.LUMPED)) if s.view)
 
-    tau: float
-    u: float
-    v: float
-    phi: float
-    omega: float
-    phi_td: float
-    w: float          # weight on bit over the last step (stick reaction included)
-    t: float          # torque on bit over the last step (a stick's reaction included)
-    ts: float         # string (surface) torque phi_td - phi
-    delta_n: float    # depth of cut per blade
-    g: float          # wear-flat contact factor
-    regime: int       # kernel.REGIME_*
-    since_stick: float
-    omega_td: float = 0.0        # top-drive speed (kinematic mode: omega0)
-    motor_torque: float = 0.0    # applied motor torque (kinematic mode: ts, which imposes omega0)
-    drive_integral: float = 0.0  # the speed PI's integral term
-    drive_reference: float = 0.0  # the drive's limited reference, the lag's input
 
-    @property
-    def stuck(self) -> bool:
-        return self.regime == kn.REGIME_STUCK
+VIEW_SLOTS = _view_fields()    # StateView's float fields: (name, index into the state x)
 
-    @property
-    def off_bottom(self) -> bool:
-        return self.regime == kn.REGIME_OFF_BOTTOM
+
+def _stuck(self) -> bool:
+    return self.regime == kn.REGIME_STUCK
+
+
+def _off_bottom(self) -> bool:
+    return self.regime == kn.REGIME_OFF_BOTTOM
+
+
+def _rescaled(self, old: Scales, new: Scales) -> StateView:
+    """The same physical state at the ``new`` scales (each slot by its unit)."""
+    return StateView(**{name: sl.STATE.slots[i].unit.rescale(getattr(self, name), old, new)
+                        for name, i in VIEW_SLOTS}, regime=self.regime)
+
+
+StateView = make_dataclass(
+    "StateView", [(name, float) for name, _ in VIEW_SLOTS] + [("regime", int)], frozen=True,
+    namespace={"stuck": property(_stuck), "off_bottom": property(_off_bottom),
+               "rescaled": _rescaled, "__module__": __name__})
+StateView.__doc__ = (
+    "A copy of the instantaneous state, dimensionless, with the model contract's names: "
+    "the lumped string's slots of ``state_layout.STATE`` (their units there) and the regime "
+    "(kernel.REGIME_*). ``motor_torque`` in kinematic mode is the string torque ts, which "
+    "imposes omega0.")
 
 
 @dataclass(frozen=True)
@@ -72,16 +75,16 @@ class Trajectory:
 
     @classmethod
     def from_rows(cls, rows: np.ndarray, metrics: Metrics) -> Trajectory:
-        return cls(tau=rows[:, kn.O_TAU].copy(), u=rows[:, kn.O_U].copy(),
-                   v=rows[:, kn.O_V].copy(), phi=rows[:, kn.O_PHI].copy(),
-                   omega=rows[:, kn.O_OMEGA].copy(), w=rows[:, kn.O_W].copy(),
-                   t=rows[:, kn.O_T].copy(), ts=rows[:, kn.O_TS].copy(),
-                   delta_n=rows[:, kn.O_DELTA].copy(),
-                   stuck=rows[:, kn.O_REGIME] == kn.REGIME_STUCK,
-                   off_bottom=rows[:, kn.O_REGIME] == kn.REGIME_OFF_BOTTOM,
-                   w0=rows[:, kn.O_W0].copy(), omega0=rows[:, kn.O_OMEGA0].copy(),
-                   metrics=metrics, omega_td=rows[:, kn.O_OMEGA_TD].copy(),
-                   motor_torque=rows[:, kn.O_TM].copy())
+        return cls(tau=rows[:, sl.O_TAU].copy(), u=rows[:, sl.O_U].copy(),
+                   v=rows[:, sl.O_V].copy(), phi=rows[:, sl.O_PHI].copy(),
+                   omega=rows[:, sl.O_OMEGA].copy(), w=rows[:, sl.O_W].copy(),
+                   t=rows[:, sl.O_T].copy(), ts=rows[:, sl.O_TS].copy(),
+                   delta_n=rows[:, sl.O_DELTA].copy(),
+                   stuck=rows[:, sl.O_REGIME] == kn.REGIME_STUCK,
+                   off_bottom=rows[:, sl.O_REGIME] == kn.REGIME_OFF_BOTTOM,
+                   w0=rows[:, sl.O_W0].copy(), omega0=rows[:, sl.O_OMEGA0].copy(),
+                   metrics=metrics, omega_td=rows[:, sl.O_OMEGA_TD].copy(),
+                   motor_torque=rows[:, sl.O_TM].copy())
 
     def to_si(self, scales: Scales, blade_count: int) -> SITrajectory:
         """The same samples in SI, units in the field names (depth of cut per revolution)."""

@@ -36,6 +36,7 @@ from ..core.sensor_profile import load_profile
 from ..core.sensors import Measured, check_sensor_seed
 from ..session.parameter_table import PERTURBATION_RANGE
 from ..session.scenario import Scenario
+from .payoff import observe_into, reward_of, weight_row
 
 # the observation: one definition for the environment and a policy in the loop
 MODES = {"torque": "off", "speed": "kinematic"}        # the loop's law for each action kind
@@ -100,6 +101,8 @@ class RigEnv(gym.Env):
                                            dtype=np.float64)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, shape=(len(OBSERVATION),),
                                                 dtype=np.float64)
+        self.weight_row = weight_row(weights, self.h, float(self.action_space.low[0]),
+                                     float(self.action_space.high[0]))
         self.loop: LoopStepper | None = None
         self.episodes = 0
         self.held_action = 0.0          # the command the drive holds now (bumpless take-over)
@@ -165,7 +168,7 @@ class RigEnv(gym.Env):
         held = min(max(value, low), high)                 # the drive's limits hold it
         loop = self.loop
         sample, reading = loop.step(held)
-        reward = self._reward(sample, held, value != held)
+        reward = self._reward(sample, value, held)
         self.held_action = held
         truncated = loop.k >= loop.n
         info = self._info(sample)
@@ -182,8 +185,10 @@ class RigEnv(gym.Env):
     # ---- what the policy sees, what it is paid ---------------------------------------------
     def _observe(self, m: Measured) -> np.ndarray:
         loop = self.loop
-        return np.array([m.top_drive_speed_rad_s, m.motor_torque_nm, m.surface_torque_nm,
-                         m.hook_load_n, float(loop.speed_set[min(loop.k, loop.n)])])
+        obs = np.empty(len(OBSERVATION))
+        observe_into(m.top_drive_speed_rad_s, m.motor_torque_nm, m.surface_torque_nm,
+                     m.hook_load_n, float(loop.speed_set[min(loop.k, loop.n)]), obs)
+        return obs
 
     def _info(self, sample) -> dict[str, object]:
         return {"time_s": sample.time_s, "bit_speed_rad_s": sample.bit_speed_rad_s,
@@ -191,17 +196,11 @@ class RigEnv(gym.Env):
                 "regime": sample.regime, "stuck": sample.stuck,
                 "scenario": self.loop.scenario.name}
 
-    def _reward(self, sample, action: float, clipped: bool) -> float:
-        w, loop = self.weights, self.loop
-        target = float(loop.speed_set[min(loop.k, loop.n)])
-        speed = ((sample.bit_speed_rad_s - target) / max(target, 1e-3)) ** 2
-        rate = 0.0
-        if self.top_drive_mode == "torque":
-            rate = (abs(action - self.held_action) / self.h / 1e6) ** 2
-        on_limit = clipped or action in (float(self.action_space.low[0]),
-                                         float(self.action_space.high[0]))
-        return -(w["speed"] * speed + w["stick"] * float(sample.stuck)
-                 + w["saturation"] * float(on_limit) + w["torque_rate"] * rate)
+    def _reward(self, sample, action: float, held: float) -> float:
+        loop = self.loop
+        return reward_of(sample.bit_speed_rad_s, float(loop.speed_set[min(loop.k, loop.n)]),
+                         sample.stuck, action, held, self.held_action,
+                         self.top_drive_mode == "torque", self.weight_row)
 
 
 class ReferencePolicy:

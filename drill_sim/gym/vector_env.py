@@ -28,9 +28,10 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 from ..control.closed_loop import SERIES
-from ..core import kernel as kn
+from ..core import state_layout as sl
 from ..core.batch import RigBatch
 from ..core.parameters import ParameterError
+from ..core.rig_step import NR, scale_row
 from ..session.scenario import Scenario
 from .rig_env import RigEnv
 from .vector_step import (
@@ -142,14 +143,12 @@ class RigVecEnv(VectorEnv):
         bank = loop.session.sensors
         if self._batch is None:
             self._batch = RigBatch(self.num_envs, rig.sim, bank)
-            self._scales = sc = rig.scales
+            self._scales = rig.scales
             self._steps_per_tick = loop.session.steps_per_tick
             self._max_speed = float(loop.session.p["max_top_drive_speed_rad_s"])
-            self._scale_row = np.array([sc.time_s, sc.force_n, sc.stiffness_nm_per_rad,
-                                        sc.length_m, rig.params.submerged_weight_n, rig.dt_s])
-            w = env.weights
-            self._weight_row = np.array([w["speed"], w["stick"], w["saturation"],
-                                         w["torque_rate"], env.h, self._low, self._high])
+            self._scale_row = scale_row(rig.params, rig.dt_s)
+            self._weight_row = env.weight_row
+            self._sample_row = np.zeros(NR)
         elif rig.scales != self._scales or loop.session.steps_per_tick != \
                 self._steps_per_tick:
             raise ParameterError("the vector environment's rigs must share their scales and "
@@ -207,14 +206,14 @@ class RigVecEnv(VectorEnv):
                                      f"max_top_drive_speed_rad_s {self._max_speed:g}")
         b, obs, reward = self._batch, self._obs, self._reward
         s = b.bank
-        common = (live, self.torque, self._steps_per_tick, values, self._held, self._speed_set,
-                  self._hook, self._k, self._n, self._window_k, self._speed_cmd, self._last,
-                  self._series, self._tob, self._scale_row, self._weight_row, obs, reward,
-                  self._window_now, s["_par"], s["_state"], s["_istate"], s["_ring"],
-                  s["_noise"], s["_window"], b.window_s, s["_x"], s["_out"], s["_fresh"],
-                  self._refill, self._exact, b.no_rows)
-        refused = step_rigs(b.x, b.k, b.surf, b.p, b.c, b.acc, b.distributed, *b.lines_args,
-                            *common)
+        refused = step_rigs(
+            (b.x, b.k, b.surf, b.p, b.c, b.acc), (b.distributed, *b.string_args),
+            (live, self.torque, self._steps_per_tick, values, self._held, self._speed_set,
+             self._hook, self._k, self._n, self._window_k, self._speed_cmd),
+            (self._last, self._series, self._tob), (self._scale_row, self._weight_row),
+            (s["_par"], s["_state"], s["_istate"], s["_ring"], s["_noise"], s["_window"],
+             b.window_s, s["_x"], s["_out"], s["_fresh"], self._refill, self._exact),
+            (obs, reward, self._window_now, b.no_rows, self._sample_row))
         if refused >= 0:              # the rigs before it have stepped: the batch is spent
             try:
                 self.envs[refused].loop.rig.sim._refuse_step()
@@ -230,8 +229,8 @@ class RigVecEnv(VectorEnv):
         last = self._last
         infos = {"time_s": last[F_TIME].copy(), "bit_speed_rad_s": last[F_BIT].copy(),
                  "wob_n": last[F_WOB].copy(), "tob_nm": self._tob.copy(),
-                 "rop_m_s": b.x[:, kn.X_V] * self._scales.velocity_m_s,
-                 "regime": b.k[:, kn.K_REGIME].copy(), "stuck": last[F_STUCK] != 0.0,
+                 "rop_m_s": b.x[:, sl.X_V] * self._scales.velocity_m_s,
+                 "regime": b.k[:, sl.K_REGIME].copy(), "stuck": last[F_STUCK] != 0.0,
                  "scenario": self._names.copy()}
         mask = live.copy()                  # every key's: the live rigs have them all
         infos |= {"_" + key: mask for key in list(infos)}

@@ -97,9 +97,7 @@ def geometry_record(geometry: StringGeometry) -> dict[str, str]:
         value = getattr(geometry, f.name)
         if f.name == "sections":
             if value:
-                record["sections"] = json.dumps([
-                    {k.name: getattr(x, k.name) for k in fields(x)
-                     if getattr(x, k.name) is not None} for x in value])
+                record["sections"] = json.dumps([x.given() for x in value])
         elif f.name == "well":
             if value is not None:
                 well = {"survey": [list(r) for r in value.survey],

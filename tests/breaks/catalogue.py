@@ -60,8 +60,8 @@ BREAKS: tuple[Break, ...] = (
         "_two_inertia_mode"),
     # ---- the distributed string's SI conversion ---------------------------------------
     one("steel density x1.5 in the wave lines", CORE + "distributed.py",
-        "            rho = sec.density_kg_m3 or steel_density_kg_m3\n",
-        "            rho = 1.5 * (sec.density_kg_m3 or steel_density_kg_m3)\n",
+        "            rho = sec.steel_density_kg_m3 or steel_density_kg_m3\n",
+        "            rho = 1.5 * (sec.steel_density_kg_m3 or steel_density_kg_m3)\n",
         f"{T_DIST}::test_natural_frequencies_off_bottom", f"{T_DIST}::test_wave_travel_and"
         "_section_change", f"{T_DIST_TD}::test_free_string_rings_at_the_roots_with_the_drive"
         "_inertia_on_top", f"{T_DIST_TD}::test_rig_in_torque_mode_spins_the_whole_string_up"),

@@ -4,6 +4,7 @@ wrong if the physics or the numerics were. Run lengths are stated in units of t*
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -366,9 +367,8 @@ def test_a_bit_that_stops_turning_while_rising_keeps_rising(base_groups):
     sim.advance(1000)
     s = sim.state()
     v_up, w0 = -1.0, 1.0
-    sim.load_state(tau=s.tau, steps=sim.steps, u=s.u, v=v_up, phi=s.phi, omega=0.0,
-                   phi_td=s.phi + 1.0, surface=sim.surface, surface_behind=sim.surface_behind,
-                   regime=REGIME_STUCK, since_stick=0.0)
+    sim.place(replace(s, v=v_up, omega=0.0, phi_td=s.phi + 1.0, regime=REGIME_STUCK,
+                      since_stick=0.0), steps=sim.steps, surface=sim.surface)
     sim.set_commands(w0, 0.0)                      # top drive stopped: the twist stays at 1
     tr = sim.run(0.2, output_interval=sim.dt)
     assert np.all(tr.stuck) and np.all(tr.omega == 0.0) and np.all(tr.delta_n > 0.0)
