@@ -104,6 +104,28 @@ def test_the_reward_and_the_observation_are_in_si():
     assert reward <= -0.1
 
 
+def test_the_reward_is_each_weights_penalty_by_hand():
+    """Every term of the reward by hand (gym.md): the speed's squared relative error, the
+    stick, the action on a limit, the rate of the held torque over the period in MN m/s,
+    squared; an action past the limit is paid as the drive holds it (the limit), not as given."""
+    fast = Scenario.steady(150.0, 90.0, duration_s=2.0, window_start_s=1.0)
+    weights = {"speed": 0.5, "stick": 2.0, "saturation": 0.3, "torque_rate": 0.7}
+    env = RigEnv("base", scenarios=[fast], control_period_s=0.01, reward_weights=weights)
+    env.reset(seed=0)
+    target = 150 * 2 * math.pi / 60
+    high = load_preset("base").top_drive.motor_torque_max_nm
+    for action in (env.held_action + 8e3, 1e9):
+        before = env.held_action
+        held = min(action, high)
+        _, reward, _, _, info = env.step(np.array([action]))
+        rate_mn_m_s = abs(held - before) / 0.01 / 1e6
+        expected = -(0.5 * ((info["bit_speed_rad_s"] - target) / target) ** 2
+                     + 2.0 * float(info["stuck"]) + 0.3 * float(held == high)
+                     + 0.7 * rate_mn_m_s ** 2)
+        assert reward == pytest.approx(expected, rel=1e-12)
+        assert env.held_action == held
+
+
 def test_a_recorded_episode_resimulates_exactly(tmp_path):
     short = Scenario.steady(60.0, 100.0, duration_s=3.0, window_start_s=1.0)
     env = RigEnv("base", scenarios=[short], record=tmp_path)
