@@ -60,14 +60,14 @@ def scale_row(params: RigParameters, dt_s: float) -> np.ndarray:
                     dtype=np.float64)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def surface_commands(speed_rad_s, hook_load_n, scales):
     """The kernel's commands (w0 [F*], omega0 [1/t*]) of a top-drive speed [rad/s] and a hook
     load [N]: w0 = (W_s - H0)/F*, omega0 = Omega0 t*."""
     return ((scales[S_WEIGHT] - hook_load_n) / scales[S_FORCE], speed_rad_s * scales[S_TIME])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def write_commands(x, c, kinematic, speed_rad_s, hook_load_n, scales):
     """Hold these surface commands (``surface_commands``) in ``c``; the kinematic drive turns
     at the speed command at once."""
@@ -78,13 +78,13 @@ def write_commands(x, c, kinematic, speed_rad_s, hook_load_n, scales):
         x[X_OMEGA_TD] = om0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def write_motor_torque(c, torque_nm, scales):
     """Hold this motor torque command [N m] in ``c`` (torque mode), in C."""
     c[C_T_CMD] = torque_nm / scales[S_TORQUE]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def take_force_sums(x, k, acc, h):
     """(sum of w, sum of t, steps) over the steps since the previous sample, and start the
     next: the window's integrals take the sample in (``h`` the step [t*])."""
@@ -98,7 +98,7 @@ def take_force_sums(x, k, acc, h):
     return sum_w, sum_t, n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def mean_forces(sum_w, sum_t, n, pending_w_n, pending_t_nm, scales):
     """(WOB [N], TOB [N m]) averaged over ``n`` steps (``n`` counting any pending ones) from
     the sums [F*], [C] and what is pending in SI (steps before a change of scales)."""
@@ -106,7 +106,7 @@ def mean_forces(sum_w, sum_t, n, pending_w_n, pending_t_nm, scales):
             (pending_t_nm + sum_t * scales[S_TORQUE]) / n)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sample_into(x, k, kinematic, speed_cmd_rad_s, scales, out):
     """The sample's fields the state gives (``SAMPLE_FIELDS``, SI) into ``out``: the values
     now. The kinematic drive's speed is the command and its motor torque the string's."""

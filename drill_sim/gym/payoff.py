@@ -26,7 +26,7 @@ def weight_row(weights: dict[str, float], control_period_s: float, low: float,
                      weights["torque_rate"], control_period_s, low, high], dtype=np.float64)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def observe_into(top_drive_speed_rad_s, motor_torque_nm, surface_torque_nm, hook_load_n,
                  speed_setpoint_rad_s, obs):
     """The observation (``control.policy.OBSERVATION``'s order, SI) into ``obs``."""
@@ -37,7 +37,7 @@ def observe_into(top_drive_speed_rad_s, motor_torque_nm, surface_torque_nm, hook
     obs[4] = speed_setpoint_rad_s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def reward_of(bit_speed_rad_s, speed_setpoint_rad_s, stuck, action, held_action, before,
               torque_mode, weights):
     """The step's reward (module docstring): ``action`` as the policy gave it, ``held_action``

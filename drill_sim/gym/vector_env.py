@@ -83,6 +83,7 @@ class RigVecEnv(VectorEnv):
         self._low = float(first.action_space.low[0])
         self._high = float(first.action_space.high[0])
         self._batch: RigBatch | None = None
+        self._args: tuple | None = None
         n = self.num_envs
         self._k = np.zeros(n, dtype=np.int64)             # each rig's sample index
         self._n = np.zeros(n, dtype=np.int64)             # each episode's last sample
@@ -178,6 +179,7 @@ class RigVecEnv(VectorEnv):
         speed_set[:, :old], hook[:, :old] = self._speed_set, self._hook
         series[:, :, :old] = self._series
         self._speed_set, self._hook, self._series = speed_set, hook, series
+        self._args = None                 # step_rigs' arguments hold the old series
 
     # ---- a step of every rig --------------------------------------------------------------------
     def step(self, actions):
@@ -205,15 +207,14 @@ class RigVecEnv(VectorEnv):
                                      f"speed {min(values[i], self._high)!r} rad/s is above "
                                      f"max_top_drive_speed_rad_s {self._max_speed:g}")
         b, obs, reward = self._batch, self._obs, self._reward
-        s = b.bank
+        if self._args is None:
+            self._args = self._fixed_args()
+        rigs, string, record, constants, sensors, outputs = self._args
         refused = step_rigs(
-            (b.x, b.k, b.surf, b.p, b.c, b.acc), (b.distributed, *b.string_args),
-            (live, self.torque, self._steps_per_tick, values, self._held, self._speed_set,
-             self._hook, self._k, self._n, self._window_k, self._speed_cmd),
-            (self._last, self._series, self._tob), (self._scale_row, self._weight_row),
-            (s["_par"], s["_state"], s["_istate"], s["_ring"], s["_noise"], s["_window"],
-             b.window_s, s["_x"], s["_out"], s["_fresh"], self._refill, self._exact),
-            (obs, reward, self._window_now, b.no_rows, self._sample_row))
+            rigs, string, (live, self.torque, self._steps_per_tick, values, self._held,
+                           self._speed_set, self._hook, self._k, self._n, self._window_k,
+                           self._speed_cmd),
+            record, constants, sensors, outputs)
         if refused >= 0:              # the rigs before it have stepped: the batch is spent
             try:
                 self.envs[refused].loop.rig.sim._refuse_step()
@@ -244,6 +245,17 @@ class RigVecEnv(VectorEnv):
             infos = self._add_info(infos, info, i)
         self._autoreset = truncated
         return obs, reward, np.zeros(n, dtype=bool), truncated.copy(), infos
+
+    def _fixed_args(self) -> tuple:
+        """``step_rigs``' arguments that stay from step to step (the batch's arrays, the
+        series, the sensors', the outputs), made once: a step builds only its schedule."""
+        b = self._batch
+        s = b.bank
+        return ((b.x, b.k, b.surf, b.p, b.c, b.acc), (b.distributed, *b.string_args),
+                (self._last, self._series, self._tob), (self._scale_row, self._weight_row),
+                (s["_par"], s["_state"], s["_istate"], s["_ring"], s["_noise"], s["_window"],
+                 b.window_s, s["_x"], s["_out"], s["_fresh"], self._refill, self._exact),
+                (self._obs, self._reward, self._window_now, b.no_rows, self._sample_row))
 
     def _finish(self, i: int) -> dict[str, object]:
         """Rig i's episode ended: its series back in its loop, scored as RigEnv scores it

@@ -102,28 +102,27 @@ def step_rigs(rigs, string, schedule, record, constants, sensors, outputs):
         series[F_OUTPUT, i, j] = held
         speed = speed_set[i, j] if torque_mode else held
         speed_cmd[i] = speed
-        write_commands(x[i], c[i], not torque_mode, speed, hook[i, j], scales)
+        xi, ki, ci, ai = x[i], k[i], c[i], acc[i]      # each rig's views, made once
+        write_commands(xi, ci, not torque_mode, speed, hook[i, j], scales)
         if torque_mode:
-            write_motor_torque(c[i], held, scales)
+            write_motor_torque(ci, held, scales)
         if distributed:
-            dk.advance(x[i], k[i], surf[i], p[i], c[i], acc[i],
+            dk.advance(xi, ki, surf[i], p[i], ci, ai,
                        (tz, tn, tf, tc, trel, toff, tbuf[i], tlp, tstate[i]),
                        (az, an, af, ac, arel, aoff, abuf[i], alp, astate[i]), wall,
                        (scratch[i], slots[i], stuck[i]), steps_per_tick, no_rows, 1, 0)
         elif torque_mode:
-            kn.advance_drive(x[i], k[i], surf[i], p[i], c[i], acc[i], steps_per_tick, no_rows,
-                             1, 0)
+            kn.advance_drive(xi, ki, surf[i], p[i], ci, ai, steps_per_tick, no_rows, 1, 0)
         else:
-            kn.advance_kinematic(x[i], k[i], surf[i], p[i], c[i], acc[i], steps_per_tick,
-                                 no_rows, 1, 0)
-        if k[i, sl.K_REFUSED]:
+            kn.advance_kinematic(xi, ki, surf[i], p[i], ci, ai, steps_per_tick, no_rows, 1, 0)
+        if ki[sl.K_REFUSED]:
             return i
         j += 1
         sample_k[i] = j
         # the sample (Rig.sample)
-        sum_w, sum_t, n = take_force_sums(x[i], k[i], acc[i], p[i, sl.P_H])
+        sum_w, sum_t, n = take_force_sums(xi, ki, ai, p[i, sl.P_H])
         wob, tob[i] = mean_forces(sum_w, sum_t, n, 0.0, 0.0, scales)
-        sample_into(x[i], k[i], not torque_mode, speed_cmd[i], scales, row)
+        sample_into(xi, ki, not torque_mode, speed, scales, row)
         time_s = row[R_TIME]
         last[F_TIME, i] = time_s
         last[F_BIT, i] = row[R_BIT]
