@@ -37,7 +37,7 @@ import math
 import numpy as np
 from numba import njit
 
-from . import bit_rock
+from . import bit_rock, state_layout
 from . import kernel as kn
 from .bit_rock import REGIME_STUCK, _bit_rock_law, _surface_at, _sweep
 from .kernel import (
@@ -48,6 +48,7 @@ from .kernel import (
     _integral_end,
     _load_drive,
     _store_drive,
+    _write_row,
 )
 from .numba_cache import follow
 from .state_layout import (  # the distributed string's slots, after the lumped ones
@@ -79,7 +80,7 @@ from .state_layout import (  # the distributed string's slots, after the lumped 
     X_V_TOP,
 )
 
-follow(__file__, kn.__file__, bit_rock.__file__)   # the cache follows what it inlines
+follow(__file__, kn.__file__, bit_rock.__file__, state_layout.__file__)   # what it compiles
 
 WALL_SWEEPS = 200                        # Gauss-Seidel sweeps at most (converged: 1e-11)
 NSCRATCH = 16                            # rows of ``advance``'s scratch (``_junctions_wall``)
@@ -596,13 +597,8 @@ def advance(x, k, surf, p, c, acc, torsion, axial, wall, work, n_steps, out, out
         steps += 1
         if out_row < rows and steps % out_every == 0:
             o = out[out_row]
-            o[kn.O_TAU], o[kn.O_U], o[kn.O_V], o[kn.O_PHI], o[kn.O_OMEGA] = tau, u, v, phi, om
-            o[kn.O_PHI_TD] = ptd
-            o[kn.O_W] = sum_w / (steps - sampled)
-            o[kn.O_T] = sum_t / (steps - sampled)
-            o[kn.O_TS], o[kn.O_DELTA], o[kn.O_REGIME] = ts_top, delta, regime
-            o[kn.O_W0], o[kn.O_OMEGA0], o[kn.O_G] = w0, om0, g
-            o[kn.O_OMEGA_TD], o[kn.O_TM] = om_td, tm if drive else ts_top
+            _write_row(o, tau, u, v, phi, om, ptd, sum_w, sum_t, steps - sampled, ts_top, delta,
+                       regime, w0, om0, g, om_td, tm if drive else ts_top)
             if extra:
                 o[O_T_BOTTOM], o[O_F_BOTTOM], o[O_V_TOP], o[O_F_TOP] = t_bot, f_bot, v_top, f_top
             out_row += 1

@@ -28,9 +28,12 @@ bit: a clamp that engages inside a step is not located. In kinematic mode (the d
 drive's branch is skipped and the arithmetic is the seed's, bit for bit.
 
 The surface is an array of N = 2^m nodes over one sector 2*pi/n, linear between nodes. All state
-lives in preallocated arrays indexed by the constants below, so advancing allocates nothing.
-Helpers that take an array stay few: inlined into the loop, each costs reference counting per
-step, so the array reads and writes of the hot loop are written in ``advance`` itself.
+lives in preallocated arrays indexed by the constants of ``state_layout`` (the one declaration
+of the state), so advancing allocates nothing. The stepping functions are compiled without
+numba's runtime (they allocate nothing), so a helper that takes an array costs no reference
+counting in the loop: the sweep (``bit_rock._sweep``), the drift and the drive's step
+(``_drift_and_drive``, ``_drive_advance``) and the output rows (``_write_row``) are the
+distributed kernel's too.
 """
 
 from __future__ import annotations
@@ -40,14 +43,12 @@ import math
 import numpy as np
 from numba import njit
 
-from . import bit_rock
+from . import bit_rock, state_layout
 from .bit_rock import REGIME_OFF_BOTTOM as REGIME_OFF_BOTTOM  # the regimes, read here as kn.*
 from .bit_rock import REGIME_ROTATING as REGIME_ROTATING
 from .bit_rock import REGIME_STUCK as REGIME_STUCK
 from .bit_rock import (  # the bit on the rock, shared
     _bit_rock_law,
-    _blade_height,
-    _first_swept_node,
     _surface_at,
     _sweep,
 )
@@ -137,7 +138,7 @@ from .state_layout import (  # the layout of the state arrays, one declaration
     X_W,
 )
 
-follow(__file__, bit_rock.__file__)       # this file's cache follows the laws it inlines
+follow(__file__, bit_rock.__file__, state_layout.__file__)   # the cache follows what it compiles
 
 MODE_KINEMATIC, MODE_SPEED, MODE_TORQUE = 0, 1, 2   # the top drive's (top_drive.MODES)
 
@@ -207,6 +208,52 @@ def _drive_books(hs, ts, t_bar, om_td_bar, a_tm, a_wm, a_wtd):
 
 
 @njit(cache=True, inline="always")
+def _drift_and_drive(drive, mode, u, v, phi, om, ptd, om_td, integral, tm, ref, h2, om0, t_cmd,
+                     ki, step, hj, kp, t_min, t_max, c_end, c_mean):
+    """The first half of a step (or part; ``h2`` its half): the bit and the top drive drift
+    half a step, the string's torque at the midpoint, and with the drive in the loop
+    (``drive``) its step (``_drive_advance``); returns (u_m, phi_m, phi_TD_m, string torque,
+    the PI's integral term at the midpoint, Omega_TD+, T_m+, reference+, mean T_m, mean
+    Omega_TD). The kinematic drive keeps its speed and holds its state."""
+    u_m = u + h2 * v
+    phi_m = phi + h2 * om
+    ptd_m = ptd + h2 * om_td
+    ts = ptd_m - phi_m
+    om_td_new = om_td
+    om_td_bar = om_td
+    integral_m, tm_new, ref_new, t_bar = integral, tm, ref, tm
+    if drive:
+        integral_m, om_td_new, tm_new, ref_new, t_bar = _drive_advance(
+            mode, om_td, integral, tm, ref, ts, om0, t_cmd, h2, ki, step, hj, kp, t_min, t_max,
+            c_end, c_mean)
+        om_td_bar = 0.5 * (om_td + om_td_new)
+    return u_m, phi_m, ptd_m, ts, integral_m, om_td_new, tm_new, ref_new, t_bar, om_td_bar
+
+
+@njit(cache=True, inline="always")
+def _write_row(o, tau, u, v, phi, om, ptd, sum_w, sum_t, n, ts, delta, regime, w0, om0, g,
+               om_td, tm):
+    """One output row ``o`` (the columns O_*): the state now, the forces' means over the
+    row's ``n`` steps (their sums ``sum_w``, ``sum_t``). Both kernels write their rows here."""
+    o[O_TAU] = tau
+    o[O_U] = u
+    o[O_V] = v
+    o[O_PHI] = phi
+    o[O_OMEGA] = om
+    o[O_PHI_TD] = ptd
+    o[O_W] = sum_w / n
+    o[O_T] = sum_t / n
+    o[O_TS] = ts
+    o[O_DELTA] = delta
+    o[O_REGIME] = regime
+    o[O_W0] = w0
+    o[O_OMEGA0] = om0
+    o[O_G] = g
+    o[O_OMEGA_TD] = om_td
+    o[O_TM] = tm
+
+
+@njit(cache=True, inline="always")
 def _hoist_limit(v_new, v_min, hpsi):
     """The drawworks holds the string back: v+ >= v_min; returns (v+, hoist force)."""
     if v_new < v_min:
@@ -270,7 +317,7 @@ def _store_drive(x, acc, om_td, integral, tm, ref, a_otd, a_tm, a_wm, a_wtd):
     acc[A_OMEGA_TD], acc[A_TM], acc[A_WORK_MOTOR], acc[A_WORK_TOP_DRIVE] = a_otd, a_tm, a_wm, a_wtd
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _located_step(x, k, surf, p, c, acc, event):
     """One step taken in parts split where a law switches, from the state arrays and back.
 
@@ -301,22 +348,14 @@ def _located_step(x, k, surf, p, c, acc, event):
     while True:
         h2 = 0.5 * hs
         hpsi = hs * psi
-        u_m = u + h2 * v
-        phi_m = phi + h2 * om
-        ptd_m = ptd + h2 * om_td
-        ts = ptd_m - phi_m
-        om_td_new = om_td
-        om_td_bar = om_td
-        integral_m, tm_new, ref_new, t_bar = integral, tm, ref, tm
-        if drive:
-            c_end, c_mean = 1.0, 1.0
-            if lag > 0.0:
-                c_end = -math.expm1(-hs / lag)
-                c_mean = 1.0 - c_end * lag / hs
-            integral_m, om_td_new, tm_new, ref_new, t_bar = _drive_advance(
-                mode, om_td, integral, tm, ref, ts, om0, t_cmd, h2, ki, rate * hs, hs / j_td, kp,
-                t_min, t_max, c_end, c_mean)
-            om_td_bar = 0.5 * (om_td + om_td_new)
+        c_end, c_mean = 1.0, 1.0
+        if drive and lag > 0.0:             # the lag's weights over this part
+            c_end = -math.expm1(-hs / lag)
+            c_mean = 1.0 - c_end * lag / hs
+        (u_m, phi_m, ptd_m, ts, integral_m, om_td_new, tm_new, ref_new, t_bar,
+         om_td_bar) = _drift_and_drive(drive, mode, u, v, phi, om, ptd, om_td, integral, tm, ref,
+                                       h2, om0, t_cmd, ki, rate * hs, hs / j_td, kp, t_min, t_max,
+                                       c_end, c_mean)
         s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
         delta_new = u_m - s_m
         regime_new, w_new, t_new, g_new, v_new, om_new, event = _bit_rock_law(
@@ -382,7 +421,7 @@ def stepper(mode: int):
     return advance_kinematic if mode == MODE_KINEMATIC else advance_drive
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def advance_kinematic(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     """``advance`` with the ideal speed source; its drive integrals are booked around the loop
     (its motor torque is the string's)."""
@@ -396,13 +435,13 @@ def advance_kinematic(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     return out_row
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def advance_drive(x, k, surf, p, c, acc, n_steps, out, out_every, out_row):
     """``advance`` with the top drive in the loop (speed or torque mode)."""
     return _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, True)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
     """``advance``'s loop; ``drive`` (a constant at each call): the top drive is in the loop
     (speed or torque mode), not the ideal speed source."""
@@ -444,20 +483,11 @@ def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
     a_w, a_t = acc[A_W], acc[A_T]
 
     for _ in range(n_steps):
-        # 1. half drift
-        u_m = u + h2 * v
-        phi_m = phi + h2 * om
-        ptd_m = ptd + h2 * om_td
-        ts = ptd_m - phi_m
-        # the top drive under its motor torque against the string's (kinematic: omega0)
-        om_td_new = om_td
-        om_td_bar = om_td
-        integral_m, tm_new, ref_new, t_bar = integral, tm, ref, tm
-        if drive:
-            integral_m, om_td_new, tm_new, ref_new, t_bar = _drive_advance(
-                mode, om_td, integral, tm, ref, ts, om0, t_cmd, h2, ki, rate_step, hj, kp, t_min,
-                t_max, c_end, c_mean)
-            om_td_bar = 0.5 * (om_td + om_td_new)
+        # 1. half drift, the top drive under its motor torque against the string's
+        (u_m, phi_m, ptd_m, ts, integral_m, om_td_new, tm_new, ref_new, t_bar,
+         om_td_bar) = _drift_and_drive(drive, mode, u, v, phi, om, ptd, om_td, integral, tm, ref,
+                                       h2, om0, t_cmd, ki, rate_step, hj, kp, t_min, t_max,
+                                       c_end, c_mean)
         # 2. depth of cut on the surface left by earlier passes
         s_m, slope = _surface_at(surf, mask, phi_m, inv_dth, k_last, s_behind)
         delta_new = u_m - s_m
@@ -488,23 +518,8 @@ def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
             v_bar = 0.5 * (v + v_new)
             om_bar = 0.5 * (om + om_new)
             u_new = u_m + h2 * v_new
-            # the blades sweep the rock (``bit_rock._sweep``, written out here: in this loop
-            # a helper taking the surface array costs a quarter of the speed, 29 -> 22 M steps/s)
-            k_new = np.int64(math.floor(phi_new * inv_dth))
-            if k_new > k_last:
-                dphi = phi_new - phi
-                for kk in range(_first_swept_node(k_last, k_new, n_nodes), k_new + 1):
-                    uc = _blade_height(kk * dth, phi, dphi, u, u_new)
-                    j = kk & mask
-                    s_behind = surf[j]             # the node's value before this pass
-                    if uc > s_behind:
-                        surf[j] = uc
-                        if uc > hole:
-                            hole = uc
-                k_last = k_new
-            elif k_new < k_last:
-                k_last = k_new
-                s_behind = surf[k_new & mask]
+            k_last, s_behind, hole = _sweep(surf, mask, n_nodes, dth, inv_dth, k_last,
+                                            s_behind, hole, phi, phi_new, u, u_new)
             a = _accumulate(a, h, regime, om_bar, v_bar, w, t, ts, f_hoist)
             sum_w += w              # what a sensor sees: forces averaged over its sample
             sum_t += t              # (and, folded in at each sample, the window's integrals)
@@ -532,22 +547,8 @@ def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
                 since_stick += h
         steps += 1
         if out_row < rows and steps % out_every == 0:
-            out[out_row, O_TAU] = tau
-            out[out_row, O_U] = u
-            out[out_row, O_V] = v
-            out[out_row, O_PHI] = phi
-            out[out_row, O_OMEGA] = om
-            out[out_row, O_PHI_TD] = ptd
-            out[out_row, O_W] = sum_w / (steps - sampled)   # means over the row's interval
-            out[out_row, O_T] = sum_t / (steps - sampled)
-            out[out_row, O_TS] = ptd - phi
-            out[out_row, O_DELTA] = delta
-            out[out_row, O_REGIME] = regime
-            out[out_row, O_W0] = w0
-            out[out_row, O_OMEGA0] = om0
-            out[out_row, O_G] = g
-            out[out_row, O_OMEGA_TD] = om_td
-            out[out_row, O_TM] = tm if drive else ptd - phi
+            _write_row(out[out_row], tau, u, v, phi, om, ptd, sum_w, sum_t, steps - sampled,
+                       ptd - phi, delta, regime, w0, om0, g, om_td, tm if drive else ptd - phi)
             out_row += 1
             a_w += h * sum_w
             a_t += h * sum_t

@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from . import state_layout
+from .numba_cache import follow
 from .parameters import RigParameters
 from .state_layout import (
     A_T,
@@ -36,6 +38,8 @@ from .state_layout import (
     X_U,
     X_V,
 )
+
+follow(__file__, state_layout.__file__)      # the cache follows the layout it compiles
 
 # a rig's scales, SI: t* [s], F* [N], C [N m/rad], L* [m], the submerged weight W_s [N], the
 # step [s], L*/t* [m/s], the blade count n

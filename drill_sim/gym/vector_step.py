@@ -12,9 +12,11 @@ from __future__ import annotations
 
 from numba import njit
 
+from ..core import bit_rock, rig_step, sensors, stick_slip
 from ..core import distributed_kernel as dk
 from ..core import kernel as kn
 from ..core import state_layout as sl
+from ..core.numba_cache import follow
 from ..core.rig_step import (
     R_BIT,
     R_DEPTH,
@@ -40,7 +42,12 @@ from ..core.sensors import (
     M_WOB,
     measure_kernel,
 )
+from . import payoff
 from .payoff import W_HIGH, W_LOW, observe_into, reward_of
+
+# the cache follows every file whose code the step compiles in (the kernels it calls included)
+follow(__file__, *(m.__file__ for m in (kn, dk, bit_rock, sl, rig_step, sensors, stick_slip,
+                                        payoff)))
 
 # the rows of ``last`` and ``series`` (closed_loop.SERIES' order)
 (F_TIME, F_BIT, F_TD_SPEED, F_SURFACE, F_MOTOR, F_OUTPUT, F_STUCK, F_DEPTH, F_TD_ANGLE,

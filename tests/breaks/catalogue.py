@@ -515,6 +515,6 @@ BREAKS: tuple[Break, ...] = (
         "tests/core/test_state_layout.py::test_a_view_carried_to_new_scales_keeps_its_si_values"),
     one("the vector step's commands with the drive's mode inverted",
         "drill_sim/gym/vector_step.py",
-        "write_commands(x[i], c[i], not torque_mode, speed, hook[i, j], scales)",
-        "write_commands(x[i], c[i], torque_mode, speed, hook[i, j], scales)", T_VEC_TORQUE),
+        "write_commands(xi, ci, not torque_mode, speed, hook[i, j], scales)",
+        "write_commands(xi, ci, torque_mode, speed, hook[i, j], scales)", T_VEC_TORQUE),
 )

@@ -1,5 +1,6 @@
 """A kernel's numba cache follows the files it inlines (``core.numba_cache``): an edit of the
-shared bit-rock laws must not leave a kernel running the cached code of the old ones."""
+shared bit-rock laws or of the state's layout must not leave a kernel running the cached code
+of the old ones."""
 
 import importlib
 import os
@@ -26,12 +27,20 @@ def test_a_kernels_stamp_changes_with_a_file_it_inlines(tmp_path):
     assert stamp() == before                   # the stamp is the contents'
 
 
-def test_the_kernels_follow_the_shared_laws():
-    for module in ("kernel", "distributed_kernel", "sensors"):     # each registers itself
-        importlib.import_module(f"drill_sim.core.{module}")
+def test_the_kernels_follow_the_shared_laws_and_the_state_layout():
+    """Each compiled module follows what it compiles in: the laws, the state's layout (its
+    indices are constants in the machine code: a slot added must not leave a kernel indexing
+    by the old layout), and for the vector step every kernel and helper it calls."""
+    for module in ("core.kernel", "core.distributed_kernel", "core.sensors", "core.rig_step",
+                   "gym.vector_step"):     # each registers itself
+        importlib.import_module(f"drill_sim.{module}")
     follows = {os.path.basename(k): sorted(os.path.basename(f) for f in v)
                for k, v in numba_cache._FOLLOWS.items()}
-    assert follows["kernel.py"] == ["bit_rock.py"]
-    assert follows["distributed_kernel.py"] == ["bit_rock.py", "kernel.py"]
+    assert follows["kernel.py"] == ["bit_rock.py", "state_layout.py"]
+    assert follows["distributed_kernel.py"] == ["bit_rock.py", "kernel.py", "state_layout.py"]
     assert follows["sensors.py"] == ["stick_slip.py"]
+    assert follows["rig_step.py"] == ["state_layout.py"]
+    assert follows["vector_step.py"] == sorted(
+        ["kernel.py", "distributed_kernel.py", "bit_rock.py", "state_layout.py", "rig_step.py",
+         "sensors.py", "stick_slip.py", "payoff.py"])
     assert numba_cache.FollowingLocator in numba_cache._IMPL._locator_classes
