@@ -103,6 +103,13 @@ class Scales:
         return 1.0 / self.time_s
 
 
+def friction_torque_ratio(mu: float, gamma: float, zeta: float) -> float:
+    """beta = mu gamma zeta: the wear flats' friction torque over the cutting torque at the same
+    weight (model contract, section 3), of the friction coefficient mu, the wear flats'
+    orientation gamma and the cutting face's inclination zeta (all [-])."""
+    return mu * gamma * zeta
+
+
 @dataclass(frozen=True)
 class RigParameters:
     """Lumped SI parameters of bit, rock and drill string (model contract, sections 1-2)."""
@@ -147,7 +154,8 @@ class RigParameters:
             n=self.blade_count,
             psi=a * zeta * eps * self.bha_inertia_kg_m2 / (self.bha_mass_kg * c),
             lam=self.wear_flat_length_m * self.contact_stress_pa / (zeta * eps * length),
-            beta=self.friction_coefficient * self.wear_flat_orientation * zeta,
+            beta=friction_torque_ratio(self.friction_coefficient, self.wear_flat_orientation,
+                                       zeta),
         )
 
     @property

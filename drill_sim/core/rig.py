@@ -15,7 +15,7 @@ import numpy as np
 from . import state_layout as sl
 from .distributed import check_string_model
 from .distributed_simulator import StringSimulator
-from .parameters import ParameterError, RigParameters, check_number
+from .parameters import ParameterError, RigParameters, check_number, friction_torque_ratio
 from .resolution import STEPS_PER_PERIOD, fastest_period, max_step, resolves
 from .rig_sample import REGIME_OFF_BOTTOM, REGIME_STUCK, RigSample
 from .rig_step import NR, mean_forces, sample_into, scale_row, surface_commands
@@ -141,7 +141,8 @@ class Rig:
             rock["intrinsic_specific_energy_pa"] / p.intrinsic_specific_energy_pa,
             p.bit_radius_m * p.wear_flat_length_m * rock["contact_stress_pa"]
             / self.scales.force_n,
-            rock["friction_coefficient"] * p.wear_flat_orientation * p.cutting_inclination)
+            friction_torque_ratio(rock["friction_coefficient"], p.wear_flat_orientation,
+                                  p.cutting_inclination))
 
     @property
     def bit_measured_depth_m(self) -> float:

@@ -367,8 +367,8 @@ BREAKS: tuple[Break, ...] = (
         'p.bit_radius_m * p.wear_flat_length_m * p.contact_stress_pa',
         "tests/core/test_formations.py::test_the_bit_cuts_each_layers_rock_from_the_step_it_enters"),
     one("a formation's friction coefficient not reaching the torque", CORE + "rig.py",
-        'rock["friction_coefficient"] * p.wear_flat_orientation * p.cutting_inclination)',
-        'p.friction_coefficient * p.wear_flat_orientation * p.cutting_inclination)',
+        'friction_torque_ratio(rock["friction_coefficient"], p.wear_flat_orientation,',
+        'friction_torque_ratio(p.friction_coefficient, p.wear_flat_orientation,',
         "tests/core/test_formations.py::test_the_bit_cuts_each_layers_rock_from_the_step_it_enters",
         "tests/core/test_formations.py::test_a_steady_start_in_a_layer_drills_its_rock"),
     one("a steady start in a harder layer at the softer rock's depth of cut", CORE +
