@@ -112,7 +112,7 @@ class LoopStepper:
         self.n = self.speed_set.size - 1
         self.check = partial(checked_change, {s.name: s for s in specs(preset)})
         checked_changes(scenario, p, self.check)          # every change, before anything runs
-        self.session = RigSession(p, geometry=preset.string, preset=preset.name)
+        self.session = RigSession(p, geometry=preset.string, preset=preset.name, rig=preset.rig)
         self.session.set_live([False] * len(self.session.outputs))   # nobody subscribes
         self.commands = _Commands(self.session)
         self.window_k = max(1, math.ceil(scenario.metrics_from_s / h - 1e-9))

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 from ..core import NoSteadyDrilling, ParameterError
 from ..core.figures import figures_line, string_first_mode
+from ..core.parameters import RigParameters
 from ..core.rig_sample import RigSample
 from ..core.sensor_profile import SensorProfile
 from ..core.sensors import Measured, session_sensors
@@ -62,19 +63,22 @@ class RigSession:
     gives its own); sensor_profile: the profile (default: the one ``p`` names); preset: its
     name, for the bag; naming: the topics' full names (for the bag); log: where the session
     says what it did (a ``logging.Logger`` or an rclpy logger); clock: the wall clock [s]
-    (monotonic) of pacing, lockstep and command ages. Raises ParameterError or
+    (monotonic) of pacing, lockstep and command ages; rig: the rig's SI parameters as the
+    caller holds them (a preset's: the rig is built from them, ``p``'s entries show them;
+    None: built from ``p``'s, as a ROS table or a bag gives them). Raises ParameterError or
     NoSteadyDrilling if ``p`` makes no rig, RecordRefused if ``p["record"]`` cannot be opened.
     """
 
     def __init__(self, p: dict[str, object], *, geometry: StringGeometry | None = None,
                  step_s: float | None = None, sensor_profile: SensorProfile | None = None,
                  preset: str = "", naming: Naming | None = None, log=None,
-                 clock: Callable[[], float] = time.monotonic, record: bool = True) -> None:
-        self.p = dict(p)
+                 clock: Callable[[], float] = time.monotonic, record: bool = True,
+                 rig: RigParameters | None = None) -> None:
+        self.p = dict(p) if rig is None else {**p, **rig.as_dict()}
         self.log = log if log is not None else logging.getLogger("drill_sim.session")
         self.clock = clock
         self.naming = naming or Naming()
-        self.rig = rules.make_rig(self.p, step_s, geometry=geometry)
+        self.rig = rules.make_rig(self.p, step_s, geometry=geometry, params=rig)
         rules.start(self.rig, self.p)
         self._layer = self.rig.layer            # the formation at the start
         self.sensors = session_sensors(self.p, self.rig.dt_s, sensor_profile)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING
 
 from ..core.parameters import ParameterError, RigParameters
@@ -69,12 +69,16 @@ def tick_refusal(rate_hz: float, dt_s: float) -> str | None:
 
 
 def make_rig(p: dict[str, object], dt_s: float | None = None,
-             geometry: StringGeometry | None = None) -> Rig:
+             geometry: StringGeometry | None = None, params: RigParameters | None = None
+             ) -> Rig:
     """The rig of a session's parameters, not yet started; its step is ``step_s(p)`` unless
     ``dt_s`` [s] is given (a recorded session's own step). ``string_model`` (absent: lumped,
     as in sessions recorded before it existed) ``distributed`` needs ``geometry``, the
-    preset's pipe (the node's) or the one a bag's ``string`` record kept (``bag resim``)."""
-    rig = Rig(rig_parameters(p), dt_s=step_s(p) if dt_s is None else dt_s,
+    preset's pipe (the node's) or the one a bag's ``string`` record kept (``bag resim``).
+    ``params``: the rig's SI parameters as the caller holds them (a preset's), which ``p``'s
+    entries then show; None: built from ``p``'s entries (a ROS parameter table, a bag)."""
+    rig = Rig(rig_parameters(p) if params is None else params,
+              dt_s=step_s(p) if dt_s is None else dt_s,
               stick_window_s=p["stick_slip_window_s"],
               hoist_speed_limit_m_s=p["hoist_speed_limit_m_s"],
               top_drive=top_drive_parameters(p),
@@ -277,8 +281,9 @@ def apply_changes(rig: Rig, old: dict[str, object], new: dict[str, object]) -> s
             rig.set_hook_mode(*hook_settings(new))
         if changed & set(TOP_DRIVE_FIELDS):
             rig.set_top_drive(top_drive_parameters(new))    # a change of mode is bumpless
-        if changed & set(RIG_FIELDS):
-            rig.replace_parameters(rig_parameters(new))
+        if changed & set(RIG_FIELDS):           # the rig's parameters with those changed
+            rig.replace_parameters(replace(rig.params, **{k: new[k] for k in RIG_FIELDS
+                                                          if k in changed}))
     except ParameterError:
         if rig.top_drive != old_drive:
             rig.set_top_drive(old_drive)
