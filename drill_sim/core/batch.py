@@ -15,14 +15,14 @@ from __future__ import annotations
 import numpy as np
 
 from . import state_layout as sl
-from .distributed_simulator import _Line
+from .distributed_simulator import LineArrays
 from .sensors import SensorBank
 from .simulator import Simulator
 
 _BANK = ("_par", "_state", "_istate", "_ring", "_noise", "_window", "_x", "_out", "_fresh")
 # what running a distributed string does not change: the same for every rig, kept once
 _SHARED = tuple(f"{line}.{name}" for line in ("torsion", "axial")
-                for name in (*_Line.FIXED, "lowpass"))
+                for name in (*LineArrays.FIXED, "lowpass"))
 
 
 def _stacked(n: int, a: np.ndarray) -> np.ndarray:
@@ -58,8 +58,8 @@ class RigBatch:
                                  np.zeros((1, 1), dtype=np.int64)))
 
     def _line(self, name: str) -> tuple:
-        """A line as ``_Line.kernel_args``, its buffers and low-pass states stacked."""
-        shared = [self.shared[f"{name}.{attr}"] for attr in _Line.FIXED]
+        """A line as ``LineArrays.kernel_args``, its buffers and low-pass states stacked."""
+        shared = [self.shared[f"{name}.{attr}"] for attr in LineArrays.FIXED]
         return (*shared, self.own[f"{name}.buf"], self.shared[f"{name}.lowpass"],
                 self.own[f"{name}.state"])
 

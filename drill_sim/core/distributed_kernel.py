@@ -45,6 +45,7 @@ from .kernel import (
     MAX_SPLITS,
     _accumulate,
     _drive_advance,
+    _fold_sample,
     _integral_end,
     _load_drive,
     _store_drive,
@@ -602,10 +603,7 @@ def advance(x, k, surf, p, c, acc, torsion, axial, wall, work, n_steps, out, out
             if extra:
                 o[O_T_BOTTOM], o[O_F_BOTTOM], o[O_V_TOP], o[O_F_TOP] = t_bot, f_bot, v_top, f_top
             out_row += 1
-            a_w += h * sum_w
-            a_tob += h * sum_t
-            sum_w = 0.0
-            sum_t = 0.0
+            a_w, a_tob, sum_w, sum_t = _fold_sample(h, a_w, a_tob, sum_w, sum_t)
             sampled = steps
     kn._store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,
               sum_w, sum_t, k_last, regime, a_om_min, a_om_max, a)

@@ -23,7 +23,7 @@ from .string_geometry import StringGeometry
 from .top_drive import DriveGroups
 
 
-class _Line:
+class LineArrays:
     """The arrays of one wave line: impedances, ring buffers (N + 1 slots per direction for a
     travel time of (N + f) steps), their offsets, the fractions f, dashpots, relative dashpots
     across the segments, the material low-passes' time constants and states (row 0: a, 1: b)."""
@@ -45,7 +45,6 @@ class _Line:
         self.buf = np.zeros(int(2 * self.n.sum()))
 
     FIXED = ("z", "n", "f", "c", "rel", "off")        # what running does not change
-    OWN = ("buf", "state")                            # a rig's own: its waves, its low-passes
 
     def kernel_args(self) -> tuple:
         """The line as ``distributed_kernel.advance`` takes it: (z, n, f, c, rel, off, buf,
@@ -83,7 +82,7 @@ class _Line:
         return h * total + held
 
 
-def wall_columns(lines: tuple[_Line, _Line], static: np.ndarray) -> np.ndarray:
+def wall_columns(lines: tuple[LineArrays, LineArrays], static: np.ndarray) -> np.ndarray:
     """The junctions' inverse where the wall rubs (``distributed_kernel._junctions_wall``):
     for each line (torsional, axial) and rubbing station k, the speeds a unit force at k gives
     every station (A^-1 e_k, with A the junctions' tridiagonal system: the impedances, the
@@ -124,7 +123,7 @@ class StringSimulator(Simulator):
                  hoist_speed_limit: float = math.inf, nodes: int | None = None,
                  drive: DriveGroups | None = None) -> None:
         self.waves = waves
-        self._t, self._a = _Line(waves.torsion), _Line(waves.axial)
+        self._t, self._a = LineArrays(waves.torsion), LineArrays(waves.axial)
         m = max(self._t.n.size, self._a.n.size)
         self._scratch = np.zeros((dk.NSCRATCH, m))
         self._slots = np.zeros((2, m), dtype=np.int64)
@@ -156,7 +155,7 @@ class StringSimulator(Simulator):
     def _homes(self) -> dict[str, tuple[object, str]]:
         homes = super()._homes()
         for name, line in (("torsion", self._t), ("axial", self._a)):
-            homes |= {f"{name}.{attr}": (line, attr) for attr in (*_Line.FIXED, "buf",
+            homes |= {f"{name}.{attr}": (line, attr) for attr in (*LineArrays.FIXED, "buf",
                                                                    "lowpass", "state")}
         return homes | {"scratch": (self, "_scratch"), "slots": (self, "_slots"),
                         "stuck": (self, "_stuck")}

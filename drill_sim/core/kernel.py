@@ -254,6 +254,13 @@ def _write_row(o, tau, u, v, phi, om, ptd, sum_w, sum_t, n, ts, delta, regime, w
 
 
 @njit(cache=True, inline="always")
+def _fold_sample(h, a_w, a_t, sum_w, sum_t):
+    """A sample taken (a row written): its force sums folded into the window's integrals of
+    w and t, and the next sample's sums started; returns (a_w, a_t, 0, 0)."""
+    return a_w + h * sum_w, a_t + h * sum_t, 0.0, 0.0
+
+
+@njit(cache=True, inline="always")
 def _hoist_limit(v_new, v_min, hpsi):
     """The drawworks holds the string back: v+ >= v_min; returns (v+, hoist force)."""
     if v_new < v_min:
@@ -550,10 +557,7 @@ def _steps(x, k, surf, p, c, acc, n_steps, out, out_every, out_row, drive):
             _write_row(out[out_row], tau, u, v, phi, om, ptd, sum_w, sum_t, steps - sampled,
                        ptd - phi, delta, regime, w0, om0, g, om_td, tm if drive else ptd - phi)
             out_row += 1
-            a_w += h * sum_w
-            a_t += h * sum_t
-            sum_w = 0.0
-            sum_t = 0.0
+            a_w, a_t, sum_w, sum_t = _fold_sample(h, a_w, a_t, sum_w, sum_t)
             sampled = steps
 
     _store(x, k, acc, tau, u, v, phi, om, ptd, s_behind, hole, since_stick, w, t, delta, g,

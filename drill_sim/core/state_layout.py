@@ -74,10 +74,9 @@ ACCELERATION = Dimension("L*/t*^2", "m/s^2", length=1, time=-2)
 TORQUE = Dimension("C", "N m", torque=1)            # torques (C times 1 rad)
 FORCE = Dimension("F*", "N", force=1)
 TORQUE_RATE = Dimension("C/t*", "N m/s", torque=1, time=-1)
-TORQUE_TIME = Dimension("C t*", "N m s", torque=1, time=1)
+TORQUE_TIME = Dimension("C t*", "N m s", torque=1, time=1)    # gains, torque impulses
 ENERGY_AXIAL = Dimension("F* L*", "J", force=1, length=1)
 IMPULSE = Dimension("F* t*", "N s", force=1, time=1)
-TORQUE_IMPULSE = Dimension("C t*", "N m s", torque=1, time=1)
 INERTIA = Dimension("I", "kg m^2")                   # the BHA's inertia I (C t*^2)
 
 
@@ -238,8 +237,8 @@ WINDOW = Block("A", np.float64, _lumped(
     ("OMEGA_MIN", "omega_min", RATE, "the bit's lowest speed"),
     ("OMEGA_MAX", "omega_max", RATE, "the bit's highest speed"),
     ("W", "w", IMPULSE, "integral of the weight on bit"),
-    ("T", "t", TORQUE_IMPULSE, "integral of the torque on bit"),
-    ("TS", "ts", TORQUE_IMPULSE, "integral of the surface torque"),
+    ("T", "t", TORQUE_TIME, "integral of the torque on bit"),
+    ("TS", "ts", TORQUE_TIME, "integral of the surface torque"),
     ("V", "v", LENGTH, "integral of the axial velocity"),
     ("STICK_TIME", "stick_time", TIME, "time stuck"),
     ("BOUNCE_TIME", "bounce_time", TIME, "time off bottom"),
@@ -251,7 +250,7 @@ WINDOW = Block("A", np.float64, _lumped(
     ("W0", "w0", IMPULSE, "integral of the available weight"),
     ("OMEGA0", "omega0", PURE, "integral of the speed command [rad]"),
     ("OMEGA_TD", "omega_td", PURE, "integral of the top drive's speed [rad]"),
-    ("TM", "motor_torque", TORQUE_IMPULSE, "integral of the motor torque"),
+    ("TM", "motor_torque", TORQUE_TIME, "integral of the motor torque"),
     ("WORK_MOTOR", "work_motor", TORQUE, "work of the motor"),
 ) + _distributed(
     ("DAMPED_ROT", "damped_rotation", TORQUE, "energy the pipe's damping dissipated turning"),

@@ -64,7 +64,7 @@ def step_rigs(rigs, string, schedule, record, constants, sensors, outputs):
     Parameters, each a tuple:
     - ``rigs``: the stacked kernel arrays (x, k, surface, p, c, acc);
     - ``string``: (distributed, torsion, axial, wall, work): the distributed string's lines
-      (``_Line.kernel_args``, buffers and low-pass states stacked), the wall's friction and
+      (``LineArrays.kernel_args``, buffers and low-pass states stacked), the wall's friction and
       each rig's work arrays (scratch, slots, held stations), as ``distributed_kernel.advance``
       takes them (the lumped string: any arrays of those types);
     - ``schedule``: (live, torque_mode, steps_per_tick, values, held_before, speed_set, hook,
