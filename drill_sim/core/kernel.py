@@ -33,7 +33,10 @@ of the state), so advancing allocates nothing. The stepping functions are compil
 numba's runtime (they allocate nothing), so a helper that takes an array costs no reference
 counting in the loop: the sweep (``bit_rock._sweep``), the drift and the drive's step
 (``_drift_and_drive``, ``_drive_advance``) and the output rows (``_write_row``) are the
-distributed kernel's too.
+distributed kernel's too. Within a call the state lives in locals: ``_load``/``_store`` (and
+``_load_drive``/``_store_drive``) move it between the arrays and the loop, around the steps
+split at a switch (``_located_step``, which steps the bit too) and at the call's ends, for both
+kernels; a new slot that a step changes joins them, one read once a call is read there.
 """
 
 from __future__ import annotations

@@ -10,8 +10,11 @@ own, so a lumped index means the same in both.
 
 The integer constants (``X_TAU``, ``NX``, ``NXD`` ...) are made here from the tables at import,
 so numba still sees constants. Adding a slot is one line in its block and its use in the
-kernel: the state view, ``Simulator.save_state``/``load_state``, the conversions between
-scales (``Rig.replace_parameters``) and the vector environment's stacking read the tables.
+kernels that step it (a lumped slot is the distributed string's too: the same bit, BHA and
+drive, stepped by ``kernel`` and by ``distributed_kernel``): the state view,
+``Simulator.save_state``/``load_state``, the conversions between scales
+(``Rig.replace_parameters``) and the vector environment's stacking read the tables. A slot
+that is bookkeeping, not physical state, is declared ``view=False``.
 """
 
 from __future__ import annotations
