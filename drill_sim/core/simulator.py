@@ -33,6 +33,8 @@ from .top_drive import DriveGroups
 from .trajectory import VIEW_SLOTS, StateView, Trajectory
 
 DEFAULT_DT = 5e-4            # [t*]; halving it moves stationary metrics ~2e-5 (test_validation)
+
+
 @dataclass(frozen=True)
 class SavedState:
     """A simulator's whole state (``Simulator.save_state``): its string model and copies of
@@ -141,7 +143,8 @@ class Simulator:
         x[sl.X_OMEGA_TD] = omega0
         x[sl.X_TM] = x[sl.X_TREF] = x[sl.X_DRIVE_I] = st.t0
         self._c[sl.C_T_CMD] = st.t0
-        self._k[:] = (0, kn.REGIME_ROTATING, 0, 0, 0)
+        self._k[:] = 0
+        self._k[sl.K_REGIME] = kn.REGIME_ROTATING
         self.reset_window()
 
     # ---- the rock ---------------------------------------------------------------------
@@ -177,7 +180,8 @@ class Simulator:
         self._x[:] = 0.0
         self._x[sl.X_U] = -gap
         self._x[sl.X_SINCE_STICK] = math.inf
-        self._k[:] = (0, kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK, 0, 0, 0)
+        self._k[:] = 0
+        self._k[sl.K_REGIME] = kn.REGIME_OFF_BOTTOM if gap > 0.0 else kn.REGIME_STUCK
         self.reset_window()
 
     def place(self, state: StateView, *, steps: int, surface: np.ndarray) -> None:
@@ -222,7 +226,10 @@ class Simulator:
         x[sl.X_SUM_W] = x[sl.X_SUM_T] = 0.0
         if self.drive.mode == "kinematic":
             x[sl.X_OMEGA_TD] = self._c[sl.C_OMEGA0]
-        self._k[:sl.NK] = (k_last, state.regime, steps, steps, 0)
+        k = self._k
+        k[:] = 0
+        k[sl.K_LAST], k[sl.K_REGIME], k[sl.K_STEPS], k[sl.K_SAMPLED] = (k_last, state.regime,
+                                                                      steps, steps)
 
     def _homes(self) -> dict[str, tuple[object, str]]:
         """Every array this simulator steps, by name: (the object holding it, its attribute).
