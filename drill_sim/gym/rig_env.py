@@ -32,6 +32,7 @@ from ..control.scenarios import named
 from ..core import load_preset
 from ..core.distributed import check_string_model
 from ..core.parameters import ParameterError, check_number
+from ..core.presets import Preset
 from ..core.sensor_profile import load_profile
 from ..core.sensors import Measured, check_sensor_seed
 from ..session.parameter_table import PERTURBATION_RANGE
@@ -43,6 +44,19 @@ MODES = {"torque": "off", "speed": "kinematic"}        # the loop's law for each
 # reward per step: -(speed * ((bit speed - set-point)/set-point)^2 + stick * stuck
 #                    + saturation * (action on a limit) + torque_rate * (|dT/dt| / 1 MN m/s)^2)
 DEFAULT_WEIGHTS = {"speed": 1.0, "stick": 1.0, "saturation": 0.1, "torque_rate": 0.0}
+
+
+def action_values(action: object, what: str) -> np.ndarray:
+    """``action`` as a flat float array, or ParameterError naming ``what`` if it is not real
+    numbers (text, objects, complex or boolean values)."""
+    try:
+        values = np.asarray(action)
+    except (TypeError, ValueError):             # ragged sequences
+        values = np.asarray(None)
+    if values.dtype.kind not in "iuf":
+        raise ParameterError(f"{what} {action!r}: expected real numbers, the top drive's "
+                             "commands (motor torque [N m] or speed [rad/s])")
+    return values.astype(np.float64).reshape(-1)
 
 
 class RigEnv(gym.Env):
@@ -67,7 +81,12 @@ class RigEnv(gym.Env):
                  reward_weights: Mapping[str, float] | None = None,
                  perturbation: float = DEFAULT_PERTURBATION,
                  record: str | Path | None = None) -> None:
-        self.preset = load_preset(preset) if isinstance(preset, str) else preset
+        if isinstance(preset, (str, Path)):
+            preset = load_preset(preset)
+        elif not isinstance(preset, Preset):
+            raise ParameterError(f"preset = {preset!r}: expected a shipped preset's name or a "
+                                 "preset file's path")
+        self.preset = preset
         if top_drive_mode not in MODES:
             raise ParameterError(f"top_drive_mode = {top_drive_mode!r}: expected torque or speed")
         self.top_drive_mode = top_drive_mode
@@ -154,9 +173,13 @@ class RigEnv(gym.Env):
         return sample, reading
 
     def step(self, action):
-        if self.loop is None:
+        loop = self.loop
+        if loop is None:
             raise RuntimeError("step before reset: call reset() first")
-        values = np.asarray(action, dtype=np.float64).reshape(-1)
+        if loop.k >= loop.n:
+            raise RuntimeError(f"step after the episode ended (truncated at sample {loop.n}): "
+                               "call reset() first")
+        values = action_values(action, "action")
         if values.size != 1:
             raise ParameterError(f"action of {values.size} values: expected one, the "
                                  "top drive's command (shape (1,) or a scalar)")
@@ -166,7 +189,6 @@ class RigEnv(gym.Env):
             raise ParameterError(f"action {value!r}: expected a finite {what}")
         low, high = float(self.action_space.low[0]), float(self.action_space.high[0])
         held = min(max(value, low), high)                 # the drive's limits hold it
-        loop = self.loop
         sample, reading = loop.step(held)
         reward = self._reward(sample, value, held)
         self.held_action = held

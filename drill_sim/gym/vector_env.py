@@ -33,7 +33,7 @@ from ..core.batch import RigBatch
 from ..core.parameters import ParameterError
 from ..core.rig_step import NR, scale_row
 from ..session.scenario import Scenario
-from .rig_env import RigEnv
+from .rig_env import RigEnv, action_values
 from .vector_step import (
     F_BIT,
     F_OUTPUT,
@@ -184,7 +184,7 @@ class RigVecEnv(VectorEnv):
     # ---- a step of every rig --------------------------------------------------------------------
     def step(self, actions):
         n = self.num_envs
-        values = np.asarray(actions, dtype=np.float64)
+        values = action_values(actions, "actions").reshape(np.shape(actions))
         if values.size != n or values.ndim > 2:
             raise ParameterError(f"actions of shape {values.shape}: expected ({n}, 1), each "
                                  "rig's top-drive command")

@@ -148,6 +148,35 @@ def test_bad_parameters_are_refused_by_name(kwargs, words):
         RigEnv(**kwargs)
 
 
+@pytest.mark.parametrize("action", ["abc", object(), 1 + 2j, True, np.array([True]),
+                                    [[1.0], [2.0, 3.0]]])
+def test_an_action_that_is_not_a_real_number_is_refused_by_name(action):
+    env = RigEnv("base", scenarios=[STEADY])
+    env.reset(seed=0)
+    with pytest.raises(ParameterError, match=r"action .*: expected real numbers"):
+        env.step(action)
+    obs, *_ = env.step(np.array([env.held_action]))      # the episode goes on
+    assert np.all(np.isfinite(obs))
+
+
+def test_a_preset_that_is_not_a_name_or_a_path_is_refused():
+    with pytest.raises(ParameterError, match="preset = True: expected a shipped preset's name"):
+        RigEnv(preset=True)
+
+
+def test_a_step_after_the_episode_ended_asks_for_a_reset():
+    short = Scenario.steady(60.0, 100.0, duration_s=0.03, window_start_s=0.0)
+    env = RigEnv("base", scenarios=[short])
+    env.reset(seed=0)
+    truncated = False
+    while not truncated:
+        *_, truncated, _ = env.step(np.array([env.held_action]))
+    with pytest.raises(RuntimeError, match=r"step after the episode ended .* call reset\(\)"):
+        env.step(np.array([env.held_action]))
+    env.reset(seed=0)
+    env.step(np.array([env.held_action]))
+
+
 def test_a_bad_action_is_refused_and_the_episode_goes_on():
     env = RigEnv("base", scenarios=[STEADY])
     env.reset(seed=0)

@@ -157,3 +157,9 @@ def test_bad_actions_are_refused_by_rig():
     for shape in ((2, 2), (4, 1), (3,)):
         with pytest.raises(ParameterError, match=r"expected \(2, 1\)"):
             vec.step(np.zeros(shape))
+    for bad in (np.array([["a"], ["b"]]), [[object()], [1.0]], np.array([[1 + 1j], [0.0]]),
+                np.array([[True], [False]])):
+        with pytest.raises(ParameterError, match="expected real numbers"):
+            vec.step(bad)
+    obs, *_ = vec.step(np.zeros((2, 1)))             # and the rigs step on
+    assert np.all(np.isfinite(obs))
