@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields, replace
 
+import numpy as np
+
 GRAVITY_M_S2 = 9.80665
 
 
@@ -20,8 +22,12 @@ class ParameterError(ValueError):
 
 def check_number(name: str, value: object, *, low: float | None = 0.0,
                  low_inclusive: bool = False, high: float | None = None) -> float:
-    """Return ``value`` as a float, or raise ParameterError naming it and the allowed range."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    """Return ``value`` as a float, or raise ParameterError naming it and the allowed range
+    (true and false are not numbers, though Python counts them as 1 and 0)."""
+    if isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"{name} = {value!r} is not a number: expected "
+                             f"{_range_text(low, low_inclusive, high)}")
+    if not isinstance(value, (int, float)):
         try:
             value = float(value)  # numpy scalars, numeric strings from YAML
         except (TypeError, ValueError):

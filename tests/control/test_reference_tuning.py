@@ -136,6 +136,7 @@ def test_a_presets_commissioning_sets_its_gains_for_a_drives_signals_only():
     ("{z_torque: {speed_lowpass_hz: .nan}}", ["commissioning.z_torque.speed_lowpass_hz",
                                               "nan"]),
     ("{z_torque: {speed_lowpass_hz: fast}}", ["speed_lowpass_hz = 'fast' is not a number"]),
+    ("{z_torque: {speed_lowpass_hz: true}}", ["speed_lowpass_hz = True is not a number"]),
     ("{z_turk: {speed_lowpass_hz: 4.5}}", ["commissioning.z_turk",
                                           "expected z_torque, got 'z_turk'"]),
     ("{z_torque: {speed_lowpas_hz: 4.5}}", ["unknown gain(s) ['speed_lowpas_hz']",
