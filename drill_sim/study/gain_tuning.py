@@ -138,20 +138,32 @@ def tune(job: TrialJob, space: Mapping[str, Range], *, trials: int, journal: Pat
     from optuna.storages import JournalStorage
     from optuna.storages.journal import JournalFileBackend
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    storage = JournalStorage(JournalFileBackend(str(journal)))
-    study = optuna.create_study(study_name=f"drill_sim_tune_{job.law}", storage=storage,
-                                load_if_exists=True, direction="minimize",
-                                sampler=optuna.samplers.TPESampler(seed=seed))
+    try:
+        storage = JournalStorage(JournalFileBackend(str(journal)))
+        study = optuna.create_study(study_name=f"drill_sim_tune_{job.law}", storage=storage,
+                                    load_if_exists=True, direction="minimize",
+                                    sampler=optuna.samplers.TPESampler(seed=seed))
+    except (ValueError, KeyError, TypeError) as exc:     # a line that is not a journal's
+        raise ParameterError(f"the study journal {journal} is damaged and cannot be resumed "
+                             f"({type(exc).__name__}: {exc}); expected a journal this command "
+                             "wrote: move it away, or give another --out") from None
     reference = {k: float(v) for k, v in job.gains.items()}
     settings = {k: (list(v) if isinstance(v, tuple) else v) for k, v in job.__dict__.items()
                 if k != "gains"}
+    searched = {name: [r.low, r.high, r.log] for name, r in space.items()}
     if not study.trials:                         # the reference first: the bar to beat
         study.set_user_attr("settings", settings)
+        study.set_user_attr("space", searched)
         study.enqueue_trial({k: reference[k] for k in space})
     elif study.user_attrs.get("settings") != settings:
         raise ParameterError(f"the study in {journal} was run with other settings "
                              f"({study.user_attrs.get('settings')}); expected the same to resume "
                              "it, or another --out for a new study")
+    elif study.user_attrs.get("space", searched) != searched:
+        raise ParameterError(f"the study in {journal} searched other gains or ranges "
+                             f"({study.user_attrs['space']}, now {searched}); expected the same "
+                             "--params and --range to resume it, or another --out for a new "
+                             "study")
     done = sum(t.state.is_finished() for t in study.trials)
     for t in study.trials:                       # trials an interruption left running
         if t.state == optuna.trial.TrialState.RUNNING:

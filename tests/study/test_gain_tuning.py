@@ -76,6 +76,19 @@ def test_the_reference_is_the_first_trial_and_a_study_resumes(short, tmp_path):
     other = gt.TrialJob(**{**job.__dict__, "sensor_seed": 3})
     with pytest.raises(ParameterError, match="was run with other settings"):
         gt.tune(other, space, trials=6, journal=journal, seed=1)
+    kp = gt.search_space("z_torque", ["kp_nm_s_rad"], job.gains, {})
+    with pytest.raises(ParameterError, match="searched other gains or ranges"):
+        gt.tune(job, kp, trials=6, journal=journal, seed=1)
+    assert len(gt.tune(job, space, trials=5, journal=journal, seed=1).trials) == 5   # intact
+
+
+def test_a_damaged_journal_is_refused_by_name_before_any_run(short, tmp_path):
+    journal = tmp_path / "study.journal"
+    journal.write_text('{"op_code": 0, "worker_id": "x"\nnot a journal line\n')
+    job = _job(short)
+    space = gt.search_space("z_torque", ["alpha"], job.gains, {})
+    with pytest.raises(ParameterError, match=r"study journal .* is damaged"):
+        gt.tune(job, space, trials=2, journal=journal, seed=1)
 
 
 @pytest.mark.parametrize(("law", "names", "ranges", "words"), [
