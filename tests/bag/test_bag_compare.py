@@ -72,8 +72,10 @@ def test_the_text_table_names_each_bag_and_marks_what_does_not_apply(bags, tmp_p
 @pytest.mark.parametrize(("extra", "words"), [
     ([], "1 bag given; expected two or more"),
     (["/etc/passwd"], "not an MCAP file"),
+    (["SAME"], "given twice; expected each bag once"),
 ])
 def test_refusals_are_one_line(bags, tmp_path, capsys, extra, words):
+    extra = [str(bags[0]) if e == "SAME" else e for e in extra]
     assert main(["bag", "compare", str(bags[0]), *extra, "--out",
                  str(tmp_path / "c.png")]) == 2
     err = capsys.readouterr().err.strip()

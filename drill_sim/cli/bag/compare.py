@@ -94,6 +94,11 @@ def load(path: Path, start_s: float = 0.0) -> Session:
 def run(args: argparse.Namespace) -> int:
     if len(args.bags) < 2:
         raise UsageError(f"bag compare: {len(args.bags)} bag given; expected two or more")
+    seen: set[Path] = set()
+    for bag in args.bags:                     # the figures are keyed by bag: each once
+        if (where := Path(bag).resolve()) in seen:
+            raise UsageError(f"bag compare: {bag} given twice; expected each bag once")
+        seen.add(where)
     plot_file("--out", args.out)
     start = in_range("--start", args.start, 0.0, 1e9, unit="s", what="a time")
     sessions = [load(p, start) for p in args.bags]
