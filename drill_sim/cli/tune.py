@@ -87,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
     reference = gt.reference_for(job)
     job = gt.TrialJob(**{**job.__dict__, "gains": reference})
     space = gt.search_space(args.law, names, reference, ranges)
+    gt.check_ends(job, space)                        # a range the law refuses: before any run
     journal = out.with_suffix(out.suffix + ".journal")
     start = time.monotonic()
 

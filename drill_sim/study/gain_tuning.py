@@ -24,7 +24,7 @@ from statistics import fmean
 
 from ..control import LAWS, default_gains
 from ..control.closed_loop import run_loop
-from ..control.evaluation import LoopSettings
+from ..control.evaluation import LoopSettings, build_law, law_top_drive
 from ..control.reference import reference_gains
 from ..control.scenarios import named
 from ..core import load_preset
@@ -111,6 +111,26 @@ def search_space(law: str, names: Sequence[str], reference: Mapping[str, float],
             raise ParameterError(f"{name}: no reference value to centre its range on; give "
                                  f"it with --range {name}=LOW:HIGH")
     return out
+
+
+def check_ends(job: TrialJob, space: Mapping[str, Range]) -> None:
+    """Build the law at both ends of each gain's range (the others at ``job``'s gains), so a
+    range the law refuses (a negative gain, a corner above what the sample period allows) is
+    refused before any run, naming the range, not after the reference trial."""
+    preset = load_preset(job.preset)
+    drive = law_top_drive(preset, job.law, None)
+    for name, r in space.items():
+        for end in (r.low, r.high):
+            settings = LoopSettings(law=job.law, gains={**job.gains, name: end},
+                                    sample_period_s=job.sample_period_s,
+                                    string_model=job.string_model,
+                                    sensor_profile=job.sensor_profile)
+            try:
+                build_law(preset, settings, drive)
+            except ParameterError as exc:
+                raise ParameterError(f"range of {name} = {r.low:g}:{r.high:g}: the law refuses "
+                                     f"{name} = {end:g} ({exc}); expected a range within the "
+                                     "gain's") from None
 
 
 @dataclass

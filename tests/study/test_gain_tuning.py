@@ -127,3 +127,19 @@ def test_the_params_file_names_only_the_controllers_parameters(short, tmp_path):
     chosen = result.best_gains if result.improved else result.reference_gains
     assert gains["alpha"] == chosen["alpha"]
     assert (gains["torque_min_nm"], gains["torque_max_nm"]) == (-60e3, 60e3)
+
+
+@pytest.mark.parametrize(("item", "words"), [
+    ("alpha=-1:1", "range of alpha = -1:1: the law refuses alpha = -1"),
+    ("speed_lowpass_hz=600:1000", "the law refuses speed_lowpass_hz = 600"),
+])
+def test_a_range_the_law_refuses_is_refused_before_any_run(item, words, tmp_path, capsys):
+    """``drill_sim tune --range``: both ends are built into the law first, so a range the law
+    refuses is one line (exit 2) and no journal is started."""
+    from drill_sim.cli.main import main
+    name = item.split("=")[0]
+    assert main(["tune", "--law", "z_torque", "--params", name, "--range", item, "--trials",
+                 "2", "--out", str(tmp_path / "t.yaml")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and words in err, err
+    assert not (tmp_path / "t.yaml.journal").exists()
