@@ -293,7 +293,6 @@ class StringSimulator(Simulator):
             line.state[:] = 0.0
         self._stuck[:] = self._wall[0] > 0.0    # at rest against the wall
         self._scratch[:] = 0.0
-        self._x[sl.NX:] = 0.0
 
     def place(self, state: object, *, steps: int, surface: np.ndarray) -> None:
         raise ParameterError("place: a distributed string's state is its wave buffers, not a "

@@ -18,7 +18,7 @@ from .distributed_simulator import StringSimulator
 from .parameters import ParameterError, RigParameters, check_number, friction_torque_ratio
 from .resolution import STEPS_PER_PERIOD, fastest_period, max_step, resolves
 from .rig_sample import REGIME_OFF_BOTTOM, REGIME_STUCK, RigSample
-from .rig_step import NR, mean_forces, sample_into, scale_row, surface_commands
+from .rig_step import NR, R_MOTOR, mean_forces, sample_into, scale_row, surface_commands
 from .simulator import DEFAULT_DT, Simulator
 from .stability import NoSteadyDrilling, SteadyState
 from .string_geometry import StringGeometry
@@ -258,9 +258,10 @@ class Rig:
     def motor_torque_nm(self) -> float:
         """The motor torque applied now [N m], as ``sample`` gives it (kinematic mode: the
         string torque), without taking ``sample``'s force means."""
-        x = self.sim.live_state
-        kinematic = self.sim.drive.mode == "kinematic"
-        return float(x[sl.X_TS if kinematic else sl.X_TM]) * self.scales.stiffness_nm_per_rad
+        sim = self.sim
+        sample_into(sim.live_state, sim.counts, sim.drive.mode == "kinematic", self._speed_rad_s,
+                    self._scale_row, self._sample_row)
+        return float(self._sample_row[R_MOTOR])
 
     @property
     def commanded_speed_rad_s(self) -> float:
