@@ -109,7 +109,10 @@ class StampMatched:
                            self._ns.size - 1)
             hit = self._ns[i] == ns
             out[hit] = self._values[i[hit]]
+            # kept for the next read: what is stamped later, and the samples of the last stamp
+            # this read did not take (a reset's pair split between two joint_states chunks)
             keep = self._ns > last
+            keep[np.flatnonzero(self._ns == last)[np.count_nonzero(ns == last):]] = True
             self._ns, self._values = self._ns[keep], self._values[keep]
         return out
 
